@@ -1,0 +1,147 @@
+#include "kernel/contact_verdict.h"
+
+#include "kernel/exact_predicates.h"
+
+#include <cmath>
+
+namespace gk {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Is the intersecting pair (ta, tb), both in A's frame and wound outward, a contact from outside?
+bool is_outside_contact(const Triangle& ta, const Triangle& tb, const Contact& c) {
+  int a_below_b = 0, b_below_a = 0, a_on_b = 0;
+  for (const Vec3& v : ta) {
+    const int s = exact::orient3d(tb[0], tb[1], tb[2], v);
+    a_below_b += s < 0;
+    a_on_b += s == 0;
+  }
+  for (const Vec3& v : tb) b_below_a += exact::orient3d(ta[0], ta[1], ta[2], v) < 0;
+  if (a_on_b == 3) {
+    const Vec3 na = (ta[1] - ta[0]).cross(ta[2] - ta[0]);
+    const Vec3 nb = (tb[1] - tb[0]).cross(tb[2] - tb[0]);
+    return na.dot(nb) < 0.0;  // coplanar: opposite normals touch, equal normals overlap
+  }
+  if (a_below_b == 0 || b_below_a == 0) return true;
+  return (c.segment_end - c.segment_start).norm() <= tolerances::kPointContactMm;
+}
+
+}  // namespace
+
+const char* to_string(Verdict v) {
+  switch (v) {
+    case Verdict::kClear: return "CLEAR";
+    case Verdict::kTouching: return "TOUCHING";
+    case Verdict::kCollision: return "COLLISION";
+    case Verdict::kInconclusive: return "INCONCLUSIVE";
+  }
+  return "INCONCLUSIVE";
+}
+
+double winding_number(const TriangleMesh& mesh, const Vec3& point) {
+  // Van Oosterom-Strackee solid angle of each triangle, summed.
+  double total = 0.0;
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const Triangle tri = mesh.triangle(t);
+    const Vec3 a = tri[0] - point, b = tri[1] - point, c = tri[2] - point;
+    const double la = a.norm(), lb = b.norm(), lc = c.norm();
+    const double numerator = a.dot(b.cross(c));
+    const double denominator = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
+    total += 2.0 * std::atan2(numerator, denominator);
+  }
+  return total / (4.0 * kPi);
+}
+
+Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
+                             const RigidTransform& pose_b, const VerdictOptions& options) {
+  if (!(options.contact_tolerance_mm >= 0.0) || !std::isfinite(options.contact_tolerance_mm))
+    return invalid_argument("contact_tolerance_mm", "must be a finite, non-negative distance");
+  VerdictResult out;
+  const bool oriented = a.mesh().is_closed_oriented() && b.mesh().is_closed_oriented();
+
+  CollisionRequest creq;
+  creq.all_contacts = true;
+  creq.max_contacts = options.max_contacts;
+  auto collided = collide(a, pose_a, b, pose_b, creq);
+  if (!collided.ok()) return collided.error();
+  CollisionResult& col = collided.value();
+  out.stats = col.stats;
+
+  if (col.colliding) {
+    out.distance_mm = 0.0;
+    out.point_a = out.point_b = col.contacts.front().point;
+    std::size_t decided_on_degenerate = 0;
+    const RigidTransform b_in_a = relative_transform(pose_a, pose_b);
+    const RigidTransform world_to_a = pose_a.inverse();
+    for (const Contact& c : col.contacts) {
+      if (c.involves_degenerate) {
+        ++decided_on_degenerate;
+        continue;
+      }
+      if (!oriented) {
+        ++out.crossing_pairs;
+        continue;
+      }
+      const Triangle ta = a.mesh().triangle(c.triangle_a);
+      const Triangle tb_local = b.mesh().triangle(c.triangle_b);
+      const Triangle tb = {b_in_a.apply(tb_local[0]), b_in_a.apply(tb_local[1]), b_in_a.apply(tb_local[2])};
+      Contact local = c;
+      local.segment_start = world_to_a.apply(c.segment_start);
+      local.segment_end = world_to_a.apply(c.segment_end);
+      if (!is_outside_contact(ta, tb, local)) ++out.crossing_pairs;
+    }
+    out.contacts = std::move(col.contacts);
+    if (out.crossing_pairs > 0) {
+      out.verdict = Verdict::kCollision;
+      out.reason = oriented ? std::to_string(out.crossing_pairs) + " triangle pairs cross"
+                            : "meshes intersect (open meshes: any contact counts as a collision)";
+    } else if (decided_on_degenerate > 0) {
+      out.verdict = Verdict::kInconclusive;
+      out.reason = "contact decided on zero-area triangles only";
+    } else if (col.truncated) {
+      out.verdict = Verdict::kInconclusive;
+      out.reason = "contact list truncated before every pair was classified";
+    } else {
+      out.verdict = Verdict::kTouching;
+      out.reason = "surfaces touch from outside without crossing";
+    }
+    return out;
+  }
+
+  auto measured = distance(a, pose_a, b, pose_b);
+  if (!measured.ok()) return measured.error();
+  const DistanceResult& d = measured.value();
+  out.distance_mm = d.distance_mm;
+  out.point_a = d.point_a;
+  out.point_b = d.point_b;
+  out.stats.node_pairs_tested += d.stats.node_pairs_tested;
+  out.stats.triangle_pairs_tested += d.stats.triangle_pairs_tested;
+
+  // Disjoint surfaces: a closed mesh may still lie wholly inside the other.
+  if (oriented) {
+    const RigidTransform b_in_a = relative_transform(pose_a, pose_b);
+    const Vec3 b_vertex_in_a = b_in_a.apply(b.mesh().vertices()[b.mesh().faces()[0][0]]);
+    const Vec3 a_vertex_in_b = b_in_a.inverse().apply(a.mesh().vertices()[a.mesh().faces()[0][0]]);
+    const bool b_inside_a = a.mesh().bounds().expanded(d.distance_mm).overlaps(Aabb{b_vertex_in_a, b_vertex_in_a}) &&
+                            std::fabs(winding_number(a.mesh(), b_vertex_in_a)) > 0.5;
+    const bool a_inside_b = !b_inside_a &&
+                            b.mesh().bounds().expanded(d.distance_mm).overlaps(Aabb{a_vertex_in_b, a_vertex_in_b}) &&
+                            std::fabs(winding_number(b.mesh(), a_vertex_in_b)) > 0.5;
+    if (b_inside_a || a_inside_b) {
+      out.verdict = Verdict::kCollision;
+      out.reason = b_inside_a ? "mesh B lies inside mesh A" : "mesh A lies inside mesh B";
+      return out;
+    }
+  }
+  if (d.distance_mm <= options.contact_tolerance_mm) {
+    out.verdict = Verdict::kTouching;
+    out.reason = "apart by no more than the contact tolerance";
+  } else {
+    out.verdict = Verdict::kClear;
+    out.reason = "apart by " + std::to_string(d.distance_mm) + " mm";
+  }
+  return out;
+}
+
+}  // namespace gk

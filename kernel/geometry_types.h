@@ -1,0 +1,15 @@
+// Basic double-precision geometry types shared by the kernel.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <array>
+
+namespace gk {
+
+using Vec3 = Eigen::Vector3d;
+using Mat3 = Eigen::Matrix3d;
+using Triangle = std::array<Vec3, 3>;
+
+}  // namespace gk

@@ -1,0 +1,66 @@
+// A bounding-volume hierarchy over a mesh's triangles, built by OCCT's SAH binned builder into an
+// OCCT BVH_Tree<double,3>. Queries read the tree's node arrays directly (a tight loop, no virtual
+// calls); refit after the vertices move uses BVH::UpdateBounds, keeping the topology.
+#pragma once
+
+#include "kernel/aabb.h"
+#include "kernel/geometry_types.h"
+#include "kernel/status.h"
+#include "kernel/triangle_mesh.h"
+
+#include <NCollection_Vec3.hxx>
+#include <NCollection_Vec4.hxx>
+
+#include <memory>
+#include <vector>
+
+namespace gk {
+
+struct BvhBuildOptions {
+  int leaf_size = 1;  // triangles per leaf
+  int bins = 32;      // SAH bins (fixed at compile time to 32 in this build; kept for reporting)
+};
+
+// A mesh ready for queries: the mesh, its tree, and its triangles' corners in tree order.
+class MeshBvh {
+ public:
+  // The node arrays as OCCT lays them out (see BVH_Tree.hxx).
+  struct NodeView {
+    const NCollection_Vec3<double>* min_point;
+    const NCollection_Vec3<double>* max_point;
+    const NCollection_Vec4<int>* info;  // x: leaf flag, y/z: children or primitive range
+  };
+
+  static Result<std::shared_ptr<MeshBvh>> build(std::shared_ptr<const TriangleMesh> mesh,
+                                                const BvhBuildOptions& options = {});
+  ~MeshBvh();
+  MeshBvh(const MeshBvh&) = delete;
+  MeshBvh& operator=(const MeshBvh&) = delete;
+
+  // Recomputes every box bottom-up from the mesh's current vertices (same topology).
+  void refit(std::shared_ptr<const TriangleMesh> moved_mesh);
+
+  const TriangleMesh& mesh() const { return *mesh_; }
+  NodeView nodes() const;
+  int node_count() const;
+  int depth() const;
+  Aabb root_bounds() const;
+
+  // Tree-ordered triangle k: its corners and its index in the mesh.
+  const Triangle& ordered_triangle(int k) const { return ordered_corners_[k]; }
+  std::uint32_t mesh_triangle_index(int k) const { return ordered_to_mesh_[k]; }
+  bool ordered_is_degenerate(int k) const { return mesh_->is_degenerate(ordered_to_mesh_[k]); }
+
+  struct Impl;
+
+ private:
+  MeshBvh() = default;
+  void reload_corners();
+
+  std::shared_ptr<const TriangleMesh> mesh_;
+  std::unique_ptr<Impl> impl_;
+  std::vector<Triangle> ordered_corners_;
+  std::vector<std::uint32_t> ordered_to_mesh_;
+};
+
+}  // namespace gk

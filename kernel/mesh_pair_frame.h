@@ -1,0 +1,115 @@
+// Two posed meshes seen from mesh A's frame: the relative transform of B, and the node tests every
+// dual-tree traversal shares. B's vertices are transformed only where a leaf pair needs them.
+#pragma once
+
+#include "kernel/mesh_bvh.h"
+#include "kernel/oriented_box.h"
+#include "kernel/rigid_transform.h"
+#include "kernel/status.h"
+#include "kernel/tolerances.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace gk {
+
+// Work done by a query (seed 004 counts these as the measure of work).
+struct QueryStats {
+  long long node_pairs_tested = 0;
+  long long triangle_pairs_tested = 0;
+};
+
+class MeshPairFrame {
+ public:
+  // Fails when a pose is not a finite rigid motion.
+  static Result<MeshPairFrame> make(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
+                                    const RigidTransform& pose_b) {
+    if (!pose_a.is_rigid()) return invalid_argument("pose_a", "not a finite rigid transform (orthonormal rotation, det +1)");
+    if (!pose_b.is_rigid()) return invalid_argument("pose_b", "not a finite rigid transform (orthonormal rotation, det +1)");
+    return MeshPairFrame(a, pose_a, b, pose_b);
+  }
+
+  const MeshBvh& a() const { return *a_; }
+  const MeshBvh& b() const { return *b_; }
+  const RigidTransform& pose_a() const { return pose_a_; }
+  const RigidTransform& b_in_a() const { return b_in_a_; }
+
+  bool is_leaf_a(int n) const { return na_.info[n].x() != 0; }
+  bool is_leaf_b(int n) const { return nb_.info[n].x() != 0; }
+  int first_child_a(int n) const { return na_.info[n].y(); }
+  int second_child_a(int n) const { return na_.info[n].z(); }
+  int first_child_b(int n) const { return nb_.info[n].y(); }
+  int second_child_b(int n) const { return nb_.info[n].z(); }
+  // Leaf primitive range [begin, end] inclusive, in tree order.
+  int begin_a(int n) const { return na_.info[n].y(); }
+  int end_a(int n) const { return na_.info[n].z(); }
+  int begin_b(int n) const { return nb_.info[n].y(); }
+  int end_b(int n) const { return nb_.info[n].z(); }
+
+  // Size measure used to decide which node of a pair to split: the larger one.
+  double size_a(int n) const { return diagonal_sq(na_, n); }
+  double size_b(int n) const { return diagonal_sq(nb_, n); }
+
+  // Separating-axis test of node boxes, conservative by the rounding slack.
+  bool nodes_overlap(int node_a, int node_b, double margin = 0.0) const {
+    Vec3 ca, ea, cb, eb;
+    box_of(na_, node_a, ca, ea);
+    box_of(nb_, node_b, cb, eb);
+    return boxes_overlap(ca, ea, b_in_a_.apply(cb), b_in_a_.rotation, abs_r_, eb, slack_ + margin);
+  }
+
+  // A lower bound of the distance between anything in node_a and anything in node_b: the larger of
+  // the box-to-box gaps measured along A's axes and along B's axes.
+  double nodes_lower_bound(int node_a, int node_b) const {
+    Vec3 ca, ea, cb, eb;
+    box_of(na_, node_a, ca, ea);
+    box_of(nb_, node_b, cb, eb);
+    const Vec3 d = b_in_a_.apply(cb) - ca;
+    const Vec3 gap_a = (d.cwiseAbs() - ea - abs_r_ * eb).cwiseMax(0.0);
+    const Vec3 gap_b = ((b_in_a_.rotation.transpose() * d).cwiseAbs() - abs_r_.transpose() * ea - eb).cwiseMax(0.0);
+    return std::max(std::max(gap_a.norm(), gap_b.norm()) - slack_, 0.0);
+  }
+
+  Triangle b_triangle_in_a(int ordered_b) const {
+    const Triangle& t = b_->ordered_triangle(ordered_b);
+    return {b_in_a_.apply(t[0]), b_in_a_.apply(t[1]), b_in_a_.apply(t[2])};
+  }
+
+  Vec3 to_world(const Vec3& p_in_a) const { return pose_a_.apply(p_in_a); }
+
+ private:
+  MeshPairFrame(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b, const RigidTransform& pose_b)
+      : a_(&a), b_(&b), na_(a.nodes()), nb_(b.nodes()), pose_a_(pose_a), b_in_a_(relative_transform(pose_a, pose_b)) {
+    abs_r_ = abs_with_epsilon(b_in_a_.rotation);
+    // Rounding in a box test is relative to the magnitude of the coordinates involved.
+    const Aabb ra = a.root_bounds(), rb = b.root_bounds();
+    const double scale = std::max({ra.min.cwiseAbs().maxCoeff(), ra.max.cwiseAbs().maxCoeff(),
+                                   b_in_a_.translation.cwiseAbs().maxCoeff() + rb.min.cwiseAbs().maxCoeff() +
+                                       rb.max.cwiseAbs().maxCoeff(), 1.0});
+    slack_ = tolerances::kBoxSlackRelative * scale;
+  }
+
+  static void box_of(const MeshBvh::NodeView& v, int n, Vec3& center, Vec3& half) {
+    const auto& lo = v.min_point[n];
+    const auto& hi = v.max_point[n];
+    center = Vec3(0.5 * (lo.x() + hi.x()), 0.5 * (lo.y() + hi.y()), 0.5 * (lo.z() + hi.z()));
+    half = Vec3(0.5 * (hi.x() - lo.x()), 0.5 * (hi.y() - lo.y()), 0.5 * (hi.z() - lo.z()));
+  }
+  static double diagonal_sq(const MeshBvh::NodeView& v, int n) {
+    const auto& lo = v.min_point[n];
+    const auto& hi = v.max_point[n];
+    const double x = hi.x() - lo.x(), y = hi.y() - lo.y(), z = hi.z() - lo.z();
+    return x * x + y * y + z * z;
+  }
+
+  const MeshBvh* a_;
+  const MeshBvh* b_;
+  MeshBvh::NodeView na_, nb_;
+  RigidTransform pose_a_;
+  RigidTransform b_in_a_;
+  Mat3 abs_r_;
+  double slack_ = 0.0;
+};
+
+}  // namespace gk

@@ -1,0 +1,123 @@
+#include "kernel/triangle_distance.h"
+
+#include "kernel/triangle_intersection.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace gk {
+
+Vec3 closest_point_on_triangle(const Vec3& x, const Triangle& t) {
+  const Vec3 &a = t[0], &b = t[1], &c = t[2];
+  const Vec3 ab = b - a, ac = c - a, ax = x - a;
+  const double d1 = ab.dot(ax), d2 = ac.dot(ax);
+  if (d1 <= 0.0 && d2 <= 0.0) return a;
+  const Vec3 bx = x - b;
+  const double d3 = ab.dot(bx), d4 = ac.dot(bx);
+  if (d3 >= 0.0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+    const double v = d1 / (d1 - d3);
+    return a + v * ab;
+  }
+  const Vec3 cx = x - c;
+  const double d5 = ab.dot(cx), d6 = ac.dot(cx);
+  if (d6 >= 0.0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+    const double w = d2 / (d2 - d6);
+    return a + w * ac;
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return b + w * (c - b);
+  }
+  const double sum = va + vb + vc;
+  if (!(sum > 0.0)) {
+    // Degenerate (zero-area) triangle: the closest point lies on one of its edges.
+    Vec3 best = a, on_edge, unused;
+    double best_d = (x - a).squaredNorm();
+    const Vec3* corners[3] = {&a, &b, &c};
+    for (int e = 0; e < 3; ++e) {
+      closest_points_on_segments(*corners[e], *corners[(e + 1) % 3], x, x, on_edge, unused);
+      const double d = (x - on_edge).squaredNorm();
+      if (d < best_d) {
+        best_d = d;
+        best = on_edge;
+      }
+    }
+    return best;
+  }
+  const double v = vb / sum, w = vc / sum;
+  return a + ab * v + ac * w;
+}
+
+void closest_points_on_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1, Vec3& on_p,
+                                Vec3& on_q) {
+  const Vec3 d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
+  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  double s = 0.0, t = 0.0;
+  if (a <= 0.0 && e <= 0.0) {
+    on_p = p0;
+    on_q = q0;
+    return;
+  }
+  if (a <= 0.0) {
+    t = std::clamp(f / e, 0.0, 1.0);
+  } else {
+    const double c = d1.dot(r);
+    if (e <= 0.0) {
+      s = std::clamp(-c / a, 0.0, 1.0);
+    } else {
+      const double b = d1.dot(d2);
+      const double denom = a * e - b * b;
+      s = denom > 0.0 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
+      t = (b * s + f) / e;
+      if (t < 0.0) {
+        t = 0.0;
+        s = std::clamp(-c / a, 0.0, 1.0);
+      } else if (t > 1.0) {
+        t = 1.0;
+        s = std::clamp((b - c) / a, 0.0, 1.0);
+      }
+    }
+  }
+  on_p = p0 + s * d1;
+  on_q = q0 + t * d2;
+}
+
+TriangleDistance triangle_distance(const Triangle& p, const Triangle& q) {
+  TriangleDistance best;
+  const TriangleIntersection hit = intersect_triangles(p, q);
+  if (hit.intersects) {
+    best.distance = 0.0;
+    best.on_p = best.on_q = 0.5 * (hit.segment_start + hit.segment_end);
+    return best;
+  }
+  double best_sq = std::numeric_limits<double>::infinity();
+  auto consider = [&](const Vec3& a, const Vec3& b) {
+    const double d = (a - b).squaredNorm();
+    if (d < best_sq) {
+      best_sq = d;
+      best.on_p = a;
+      best.on_q = b;
+    }
+  };
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      Vec3 a, b;
+      closest_points_on_segments(p[i], p[(i + 1) % 3], q[j], q[(j + 1) % 3], a, b);
+      consider(a, b);
+    }
+  }
+  for (int i = 0; i < 3; ++i) {
+    consider(p[i], closest_point_on_triangle(p[i], q));
+    consider(closest_point_on_triangle(q[i], p), q[i]);
+  }
+  best.distance = std::sqrt(best_sq);
+  return best;
+}
+
+}  // namespace gk

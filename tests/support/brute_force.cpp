@@ -1,0 +1,60 @@
+#include "tests/support/brute_force.h"
+
+#include "kernel/triangle_distance.h"
+#include "kernel/triangle_intersection.h"
+
+#include <limits>
+#include <vector>
+
+namespace gk::testing {
+namespace {
+
+std::vector<Triangle> b_in_a_frame(const TriangleMesh& b, const RigidTransform& b_in_a) {
+  std::vector<Triangle> out;
+  out.reserve(b.triangle_count());
+  for (std::size_t j = 0; j < b.triangle_count(); ++j) {
+    const Triangle t = b.triangle(j);
+    out.push_back({b_in_a.apply(t[0]), b_in_a.apply(t[1]), b_in_a.apply(t[2])});
+  }
+  return out;
+}
+
+}  // namespace
+
+PairSet brute_force_contacts(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
+                             const RigidTransform& pose_b) {
+  const auto tb = b_in_a_frame(b, relative_transform(pose_a, pose_b));
+  PairSet out;
+  for (std::size_t i = 0; i < a.triangle_count(); ++i) {
+    const Triangle ta = a.triangle(i);
+    for (std::size_t j = 0; j < tb.size(); ++j)
+      if (triangles_intersect(ta, tb[j])) out.insert({static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)});
+  }
+  return out;
+}
+
+double brute_force_distance(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
+                            const RigidTransform& pose_b) {
+  const auto tb = b_in_a_frame(b, relative_transform(pose_a, pose_b));
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < a.triangle_count(); ++i) {
+    const Triangle ta = a.triangle(i);
+    for (const Triangle& t : tb) best = std::min(best, triangle_distance(ta, t).distance);
+  }
+  return best;
+}
+
+PairSet brute_force_pairs_within(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
+                                 const RigidTransform& pose_b, double delta_mm) {
+  const auto tb = b_in_a_frame(b, relative_transform(pose_a, pose_b));
+  PairSet out;
+  for (std::size_t i = 0; i < a.triangle_count(); ++i) {
+    const Triangle ta = a.triangle(i);
+    for (std::size_t j = 0; j < tb.size(); ++j)
+      if (triangle_distance(ta, tb[j]).distance <= delta_mm)
+        out.insert({static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)});
+  }
+  return out;
+}
+
+}  // namespace gk::testing

@@ -1,0 +1,24 @@
+// All-pairs oracles: every triangle of A against every triangle of B, no tree involved.
+// B's triangles are moved into A's frame with the same relative transform the queries use.
+#pragma once
+
+#include "kernel/rigid_transform.h"
+#include "kernel/triangle_mesh.h"
+
+#include <set>
+#include <utility>
+
+namespace gk::testing {
+
+using PairSet = std::set<std::pair<std::uint32_t, std::uint32_t>>;
+
+PairSet brute_force_contacts(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
+                             const RigidTransform& pose_b);
+
+double brute_force_distance(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
+                            const RigidTransform& pose_b);
+
+PairSet brute_force_pairs_within(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
+                                 const RigidTransform& pose_b, double delta_mm);
+
+}  // namespace gk::testing

@@ -1,0 +1,77 @@
+#include "tests/support/random_meshes.h"
+
+#include <Eigen/Geometry>
+
+#include <map>
+#include <utility>
+
+namespace gk::testing {
+
+TriangleMesh random_closed_blob(Rng& rng, int subdivisions, double radius, double roughness, const Vec3& center) {
+  std::vector<Vec3> v = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  std::vector<TriangleMesh::Face> f = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4},
+                                       {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+  for (int level = 0; level < subdivisions; ++level) {
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> midpoint;
+    auto mid = [&](std::uint32_t a, std::uint32_t b) {
+      const auto key = std::minmax(a, b);
+      auto it = midpoint.find(key);
+      if (it != midpoint.end()) return it->second;
+      v.push_back((v[a] + v[b]).normalized());
+      const auto id = static_cast<std::uint32_t>(v.size() - 1);
+      midpoint[key] = id;
+      return id;
+    };
+    std::vector<TriangleMesh::Face> next;
+    for (const auto& t : f) {
+      const std::uint32_t ab = mid(t[0], t[1]), bc = mid(t[1], t[2]), ca = mid(t[2], t[0]);
+      next.push_back({t[0], ab, ca});
+      next.push_back({ab, t[1], bc});
+      next.push_back({ca, bc, t[2]});
+      next.push_back({ab, bc, ca});
+    }
+    f.swap(next);
+  }
+  std::uniform_real_distribution<double> r(radius * (1.0 - roughness), radius);
+  for (Vec3& p : v) p = center + p.normalized() * r(rng);
+  return TriangleMesh::create(std::move(v), std::move(f)).value();
+}
+
+TriangleMesh box_mesh(const Vec3& lo, const Vec3& hi) {
+  std::vector<Vec3> v;
+  for (int k = 0; k < 8; ++k)
+    v.emplace_back((k & 1) ? hi.x() : lo.x(), (k & 2) ? hi.y() : lo.y(), (k & 4) ? hi.z() : lo.z());
+  // Outward, counter-clockwise seen from outside.
+  std::vector<TriangleMesh::Face> f = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                                       {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+  return TriangleMesh::create(std::move(v), std::move(f)).value();
+}
+
+TriangleMesh random_soup(Rng& rng, int n, double extent, double size) {
+  std::uniform_real_distribution<double> pos(-extent, extent), off(-size, size);
+  std::vector<Vec3> v;
+  std::vector<TriangleMesh::Face> f;
+  for (int i = 0; i < n; ++i) {
+    const Vec3 c(pos(rng), pos(rng), pos(rng));
+    const auto base = static_cast<std::uint32_t>(v.size());
+    for (int k = 0; k < 3; ++k) v.push_back(c + Vec3(off(rng), off(rng), off(rng)));
+    f.push_back({base, base + 1, base + 2});
+  }
+  return TriangleMesh::create(std::move(v), std::move(f)).value();
+}
+
+RigidTransform random_pose(Rng& rng, double range) {
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::uniform_real_distribution<double> t(-range, range);
+  Eigen::Quaterniond q(g(rng), g(rng), g(rng), g(rng));
+  q.normalize();
+  return {q.toRotationMatrix(), Vec3(t(rng), t(rng), t(rng))};
+}
+
+std::shared_ptr<const TriangleMesh> share(TriangleMesh mesh) {
+  return std::make_shared<const TriangleMesh>(std::move(mesh));
+}
+
+std::string shared_data(const std::string& relative) { return std::string(GATEKEEPER_SHARED_DATA) + "/" + relative; }
+
+}  // namespace gk::testing

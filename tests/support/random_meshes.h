@@ -1,0 +1,34 @@
+// Seeded random meshes and poses for tests.
+#pragma once
+
+#include "kernel/rigid_transform.h"
+#include "kernel/triangle_mesh.h"
+
+#include <memory>
+#include <random>
+#include <string>
+
+namespace gk::testing {
+
+using Rng = std::mt19937_64;
+
+// A closed, outward-oriented, star-shaped blob: a subdivided octahedron whose vertices are pushed
+// to random radii in [radius * (1 - roughness), radius]. subdivisions 0 gives 8 triangles, each
+// level multiplies by 4.
+TriangleMesh random_closed_blob(Rng& rng, int subdivisions, double radius, double roughness, const Vec3& center);
+
+// An axis-aligned box as a closed, outward-oriented 12-triangle mesh.
+TriangleMesh box_mesh(const Vec3& min, const Vec3& max);
+
+// A soup of n random triangles of edge length up to size inside a cube of half side extent.
+TriangleMesh random_soup(Rng& rng, int n, double extent, double size);
+
+// A uniformly random rotation with a translation uniform in [-range, range]^3.
+RigidTransform random_pose(Rng& rng, double range);
+
+std::shared_ptr<const TriangleMesh> share(TriangleMesh mesh);
+
+// Path of a file in ../shared/data.
+std::string shared_data(const std::string& relative);
+
+}  // namespace gk::testing
