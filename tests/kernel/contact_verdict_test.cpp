@@ -1,1 +1,111 @@
+// CLEAR / TOUCHING / COLLISION / INCONCLUSIVE on closed and open meshes, and the invariant that
+// moving one mesh along the witness direction by the distance minus or plus a little flips it.
+#include "kernel/contact_verdict.h"
+#include "kernel/mesh_bvh.h"
+#include "tests/support/random_meshes.h"
+
 #include <gtest/gtest.h>
+
+namespace gk {
+namespace {
+
+using testing::Rng;
+
+std::shared_ptr<MeshBvh> box(const Vec3& lo, const Vec3& hi) {
+  return MeshBvh::build(testing::share(testing::box_mesh(lo, hi))).value();
+}
+
+Verdict verdict_of(const MeshBvh& a, const MeshBvh& b, const RigidTransform& pose_b = {}) {
+  return assess(a, {}, b, pose_b).value().verdict;
+}
+
+TEST(ContactVerdict, BoxesStackedFaceToFaceTouch) {
+  const auto a = box(Vec3(0, 0, 0), Vec3(10, 10, 10));
+  const auto b = box(Vec3(2, 3, 10), Vec3(6, 7, 14));
+  EXPECT_EQ(verdict_of(*a, *b), Verdict::kTouching);
+  EXPECT_EQ(verdict_of(*b, *a), Verdict::kTouching);
+}
+
+TEST(ContactVerdict, OverlapGapAndContactTolerance) {
+  const auto a = box(Vec3(0, 0, 0), Vec3(10, 10, 10));
+  const auto b = box(Vec3(2, 3, 0), Vec3(6, 7, 4));
+  EXPECT_EQ(verdict_of(*a, *b, RigidTransform::from_translation(Vec3(0, 0, 10 - 0.003))), Verdict::kCollision);
+  EXPECT_EQ(verdict_of(*a, *b, RigidTransform::from_translation(Vec3(0, 0, 10 + 0.003))), Verdict::kClear);
+  const double inside_tolerance = 0.5 * tolerances::kContactMm;
+  EXPECT_EQ(verdict_of(*a, *b, RigidTransform::from_translation(Vec3(0, 0, 10 + inside_tolerance))), Verdict::kTouching);
+}
+
+TEST(ContactVerdict, ContainedBoxIsACollisionWithoutAnySurfaceContact) {
+  const auto outer = box(Vec3(0, 0, 0), Vec3(10, 10, 10));
+  const auto inner = box(Vec3(4, 4, 4), Vec3(5, 5, 5));
+  const auto v = assess(*outer, {}, *inner, {}).value();
+  EXPECT_EQ(v.verdict, Verdict::kCollision);
+  EXPECT_TRUE(v.contacts.empty());
+  EXPECT_EQ(verdict_of(*inner, *outer), Verdict::kCollision);
+}
+
+TEST(ContactVerdict, FlushInsideIsACollisionNotATouch) {
+  // Shares the top face plane with equal normals: overlapping volume, coplanar faces.
+  const auto outer = box(Vec3(0, 0, 0), Vec3(10, 10, 10));
+  const auto inner = box(Vec3(2, 2, 6), Vec3(5, 5, 10));
+  EXPECT_EQ(verdict_of(*outer, *inner), Verdict::kCollision);
+}
+
+TEST(ContactVerdict, EdgeRestingOnAFaceTouches) {
+  const auto a = box(Vec3(-10, -10, -10), Vec3(10, 10, 0));
+  const auto b = box(Vec3(-2, -2, -2), Vec3(2, 2, 2));
+  // B turned 45 degrees about x so an edge points down; lifted so that edge lies on z = 0. The
+  // rotation rounds the edge's height by ~1e-16 mm, far inside the contact tolerance.
+  RigidTransform pose = RigidTransform::from_axis_angle(Vec3::UnitX(), 0.25 * 3.14159265358979323846);
+  pose.translation = Vec3(0, 0, 2.0 * std::sqrt(2.0));
+  EXPECT_EQ(verdict_of(*a, *b, pose), Verdict::kTouching);
+  pose.translation.z() -= 0.01;
+  EXPECT_EQ(verdict_of(*a, *b, pose), Verdict::kCollision);
+}
+
+TEST(ContactVerdict, OpenMeshesThatIntersectCollide) {
+  Rng rng(4);
+  const auto a = MeshBvh::build(testing::share(testing::random_soup(rng, 200, 5.0, 2.0))).value();
+  const auto b = MeshBvh::build(testing::share(testing::random_soup(rng, 200, 5.0, 2.0))).value();
+  const auto v = assess(*a, {}, *b, {}).value();
+  ASSERT_FALSE(v.contacts.empty());
+  EXPECT_EQ(v.verdict, Verdict::kCollision);
+}
+
+TEST(ContactVerdict, MovingByTheDistanceAlongTheWitnessFlipsTheVerdict) {
+  Rng rng(77);
+  int checked = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const auto a = MeshBvh::build(testing::share(testing::random_closed_blob(rng, 2, 10.0, 0.15, Vec3::Zero()))).value();
+    const auto b = MeshBvh::build(testing::share(testing::random_closed_blob(rng, 2, 8.0, 0.15, Vec3::Zero()))).value();
+    const RigidTransform pose_a = testing::random_pose(rng, 1000.0);
+    RigidTransform pose_b = testing::random_pose(rng, 1.0);
+    const Vec3 dir = Vec3::Random().normalized();
+    pose_b.translation = pose_a.translation + dir * 30.0;
+    const auto start = assess(*a, pose_a, *b, pose_b).value();
+    ASSERT_EQ(start.verdict, Verdict::kClear);
+    const double d = start.distance_mm;
+    const Vec3 u = (start.point_b - start.point_a) / d;
+    const double eps = 0.01;  // [mm], 100x the contact tolerance
+    RigidTransform nearer = pose_b, past = pose_b;
+    nearer.translation -= (d - eps) * u;
+    past.translation -= (d + eps) * u;
+    const auto near_v = assess(*a, pose_a, *b, nearer).value();
+    EXPECT_EQ(near_v.verdict, Verdict::kClear) << "trial " << trial;
+    // After the move the old witnesses are eps apart, so the minimum is at most eps (1e-9 rounding).
+    EXPECT_LE(near_v.distance_mm, eps + 1e-9);
+    EXPECT_EQ(assess(*a, pose_a, *b, past).value().verdict, Verdict::kCollision) << "trial " << trial;
+    ++checked;
+  }
+  EXPECT_EQ(checked, 60);
+}
+
+TEST(ContactVerdict, ToStringNamesEveryVerdict) {
+  EXPECT_STREQ(to_string(Verdict::kClear), "CLEAR");
+  EXPECT_STREQ(to_string(Verdict::kTouching), "TOUCHING");
+  EXPECT_STREQ(to_string(Verdict::kCollision), "COLLISION");
+  EXPECT_STREQ(to_string(Verdict::kInconclusive), "INCONCLUSIVE");
+}
+
+}  // namespace
+}  // namespace gk
