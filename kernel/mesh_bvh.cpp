@@ -70,6 +70,7 @@ Result<std::shared_ptr<MeshBvh>> MeshBvh::build(std::shared_ptr<const TriangleMe
   const BVH_BinnedBuilder<double, 3, 32> builder(options.leaf_size, BVH_Constants_MaxTreeDepth);
   builder.Build(bvh->impl_->set.get(), &bvh->impl_->tree, root);
   bvh->reload_corners();
+  bvh->reload_node_boxes();
   return bvh;
 }
 
@@ -78,6 +79,20 @@ void MeshBvh::refit(std::shared_ptr<const TriangleMesh> moved_mesh) {
   impl_->set->set_mesh(*mesh_);
   if (impl_->tree.Length() > 0) BVH::UpdateBounds<double, 3>(impl_->set.get(), &impl_->tree, 0);
   reload_corners();
+  reload_node_boxes();
+}
+
+void MeshBvh::reload_node_boxes() {
+  const auto& t = impl_->tree;
+  const int n = t.Length();
+  node_center_.resize(n);
+  node_half_.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const auto& lo = t.MinPoint(i);
+    const auto& hi = t.MaxPoint(i);
+    node_center_[i] = Vec3(0.5 * (lo.x() + hi.x()), 0.5 * (lo.y() + hi.y()), 0.5 * (lo.z() + hi.z()));
+    node_half_[i] = Vec3(0.5 * (hi.x() - lo.x()), 0.5 * (hi.y() - lo.y()), 0.5 * (hi.z() - lo.z()));
+  }
 }
 
 void MeshBvh::reload_corners() {

@@ -41,6 +41,10 @@ class MeshBvh {
   void refit(std::shared_ptr<const TriangleMesh> moved_mesh);
 
   const TriangleMesh& mesh() const { return *mesh_; }
+  // Each node's box as centre and half extents, derived from the tree's min/max arrays after every
+  // build or refit: the form the separating-axis and distance-bound tests consume.
+  const Vec3& node_center(int n) const { return node_center_[n]; }
+  const Vec3& node_half_extent(int n) const { return node_half_[n]; }
   NodeView nodes() const;
   int node_count() const;
   int depth() const;
@@ -56,10 +60,13 @@ class MeshBvh {
  private:
   MeshBvh() = default;
   void reload_corners();
+  void reload_node_boxes();
 
   std::shared_ptr<const TriangleMesh> mesh_;
   std::unique_ptr<Impl> impl_;
   std::vector<Triangle> ordered_corners_;
+  std::vector<Vec3> node_center_;
+  std::vector<Vec3> node_half_;
   std::vector<std::uint32_t> ordered_to_mesh_;
 };
 

@@ -45,8 +45,8 @@ Result<DistanceResult> distance(const MeshBvh& a, const RigidTransform& pose_a, 
         const Triangle tb = frame.b_triangle_in_a(kb);
         for (int ka = frame.begin_a(p.a); ka <= frame.end_a(p.a); ++ka) {
           ++result.stats.triangle_pairs_tested;
-          const TriangleDistance d = triangle_distance(a.ordered_triangle(ka), tb);
-          if (d.distance < best) {
+          const TriangleDistance d = triangle_distance(a.ordered_triangle(ka), tb, best);
+          if (!d.bounded_only && d.distance < best) {
             best = d.distance;
             best_ka = ka;
             best_kb = kb;
@@ -112,8 +112,8 @@ Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pos
         const Triangle tb = frame.b_triangle_in_a(kb);
         for (int ka = frame.begin_a(na); ka <= frame.end_a(na); ++ka) {
           ++result.stats.triangle_pairs_tested;
-          const TriangleDistance d = triangle_distance(a.ordered_triangle(ka), tb);
-          if (d.distance <= delta_mm) {
+          const TriangleDistance d = triangle_distance(a.ordered_triangle(ka), tb, std::nextafter(delta_mm, 1e300));
+          if (!d.bounded_only && d.distance <= delta_mm) {
             result.pairs.push_back({a.mesh_triangle_index(ka), b.mesh_triangle_index(kb), d.distance,
                                     frame.to_world(d.on_p), frame.to_world(d.on_q)});
           }

@@ -48,24 +48,21 @@ class MeshPairFrame {
   int end_b(int n) const { return nb_.info[n].z(); }
 
   // Size measure used to decide which node of a pair to split: the larger one.
-  double size_a(int n) const { return diagonal_sq(na_, n); }
-  double size_b(int n) const { return diagonal_sq(nb_, n); }
+  double size_a(int n) const { return diagonal_sq(*a_, n); }
+  double size_b(int n) const { return diagonal_sq(*b_, n); }
 
   // Separating-axis test of node boxes, conservative by the rounding slack.
   bool nodes_overlap(int node_a, int node_b, double margin = 0.0) const {
-    Vec3 ca, ea, cb, eb;
-    box_of(na_, node_a, ca, ea);
-    box_of(nb_, node_b, cb, eb);
-    return boxes_overlap(ca, ea, b_in_a_.apply(cb), b_in_a_.rotation, abs_r_, eb, slack_ + margin);
+    return boxes_overlap(a_->node_center(node_a), a_->node_half_extent(node_a), b_in_a_.apply(b_->node_center(node_b)),
+                         b_in_a_.rotation, abs_r_, b_->node_half_extent(node_b), slack_ + margin);
   }
 
   // A lower bound of the distance between anything in node_a and anything in node_b: the larger of
   // the box-to-box gaps measured along A's axes and along B's axes.
   double nodes_lower_bound(int node_a, int node_b) const {
-    Vec3 ca, ea, cb, eb;
-    box_of(na_, node_a, ca, ea);
-    box_of(nb_, node_b, cb, eb);
-    const Vec3 d = b_in_a_.apply(cb) - ca;
+    const Vec3& ea = a_->node_half_extent(node_a);
+    const Vec3& eb = b_->node_half_extent(node_b);
+    const Vec3 d = b_in_a_.apply(b_->node_center(node_b)) - a_->node_center(node_a);
     const Vec3 gap_a = (d.cwiseAbs() - ea - abs_r_ * eb).cwiseMax(0.0);
     const Vec3 gap_b = ((b_in_a_.rotation.transpose() * d).cwiseAbs() - abs_r_.transpose() * ea - eb).cwiseMax(0.0);
     return std::max(std::max(gap_a.norm(), gap_b.norm()) - slack_, 0.0);
@@ -90,18 +87,7 @@ class MeshPairFrame {
     slack_ = tolerances::kBoxSlackRelative * scale;
   }
 
-  static void box_of(const MeshBvh::NodeView& v, int n, Vec3& center, Vec3& half) {
-    const auto& lo = v.min_point[n];
-    const auto& hi = v.max_point[n];
-    center = Vec3(0.5 * (lo.x() + hi.x()), 0.5 * (lo.y() + hi.y()), 0.5 * (lo.z() + hi.z()));
-    half = Vec3(0.5 * (hi.x() - lo.x()), 0.5 * (hi.y() - lo.y()), 0.5 * (hi.z() - lo.z()));
-  }
-  static double diagonal_sq(const MeshBvh::NodeView& v, int n) {
-    const auto& lo = v.min_point[n];
-    const auto& hi = v.max_point[n];
-    const double x = hi.x() - lo.x(), y = hi.y() - lo.y(), z = hi.z() - lo.z();
-    return x * x + y * y + z * z;
-  }
+  static double diagonal_sq(const MeshBvh& m, int n) { return m.node_half_extent(n).squaredNorm(); }
 
   const MeshBvh* a_;
   const MeshBvh* b_;

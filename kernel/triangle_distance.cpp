@@ -88,13 +88,55 @@ void closest_points_on_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, 
   on_q = q0 + t * d2;
 }
 
-TriangleDistance triangle_distance(const Triangle& p, const Triangle& q) {
+namespace {
+
+// Distance from the plane of t to the nearest corner of other, when all of other's corners lie
+// strictly on one side; 0 when they straddle or touch the plane.
+double plane_separation(const Triangle& t, const Triangle& other) {
+  const Vec3 n = (t[1] - t[0]).cross(t[2] - t[0]);
+  const double len = n.norm();
+  if (!(len > 0.0)) return 0.0;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const Vec3& v : other) {
+    const double s = n.dot(v - t[0]);
+    lo = std::min(lo, s);
+    hi = std::max(hi, s);
+  }
+  if (lo > 0.0) return lo / len;
+  if (hi < 0.0) return -hi / len;
+  return 0.0;
+}
+
+double box_gap(const Triangle& p, const Triangle& q) {
+  const Vec3 pmin = p[0].cwiseMin(p[1]).cwiseMin(p[2]), pmax = p[0].cwiseMax(p[1]).cwiseMax(p[2]);
+  const Vec3 qmin = q[0].cwiseMin(q[1]).cwiseMin(q[2]), qmax = q[0].cwiseMax(q[1]).cwiseMax(q[2]);
+  return (qmin - pmax).cwiseMax(pmin - qmax).cwiseMax(Vec3::Zero()).norm();
+}
+
+}  // namespace
+
+double triangle_distance_lower_bound(const Triangle& p, const Triangle& q) {
+  return std::max({box_gap(p, q), plane_separation(p, q), plane_separation(q, p)});
+}
+
+TriangleDistance triangle_distance(const Triangle& p, const Triangle& q, double stop_at) {
   TriangleDistance best;
-  const TriangleIntersection hit = intersect_triangles(p, q);
-  if (hit.intersects) {
-    best.distance = 0.0;
-    best.on_p = best.on_q = 0.5 * (hit.segment_start + hit.segment_end);
+  const double bound = triangle_distance_lower_bound(p, q);
+  if (bound >= stop_at) {
+    best.distance = bound;
+    best.bounded_only = true;
     return best;
+  }
+  // The exact intersection test is needed only when the floating bound cannot rule contact out
+  // with a margin far above its rounding (1e-9 relative to the coordinates).
+  const double magnitude = std::max({p[0].cwiseAbs().maxCoeff(), q[0].cwiseAbs().maxCoeff(), 1.0});
+  if (!(bound > 1e-9 * magnitude)) {
+    const TriangleIntersection hit = intersect_triangles(p, q);
+    if (hit.intersects) {
+      best.distance = 0.0;
+      best.on_p = best.on_q = 0.5 * (hit.segment_start + hit.segment_end);
+      return best;
+    }
   }
   double best_sq = std::numeric_limits<double>::infinity();
   auto consider = [&](const Vec3& a, const Vec3& b) {
@@ -110,6 +152,16 @@ TriangleDistance triangle_distance(const Triangle& p, const Triangle& q) {
       Vec3 a, b;
       closest_points_on_segments(p[i], p[(i + 1) % 3], q[j], q[(j + 1) % 3], a, b);
       consider(a, b);
+      // Early exit (as in PQP's TriDist): when the plane through a normal to b - a has all of p on
+      // a's side and all of q on b's side, no pair of points can be closer than this one.
+      const Vec3 v = b - a;
+      if (v.squaredNorm() > 0.0 && (p[0] - a).dot(v) <= 0.0 && (p[1] - a).dot(v) <= 0.0 && (p[2] - a).dot(v) <= 0.0 &&
+          (q[0] - b).dot(v) >= 0.0 && (q[1] - b).dot(v) >= 0.0 && (q[2] - b).dot(v) >= 0.0) {
+        best.on_p = a;
+        best.on_q = b;
+        best.distance = v.norm();
+        return best;
+      }
     }
   }
   for (int i = 0; i < 3; ++i) {

@@ -1,0 +1,349 @@
+// Kernel benchmarks against FCL 0.7 (OBBRSS) in the same process, on the same meshes and poses.
+//   build/tests/benchmarks/kernel_benchmark [--benchmark_filter=...]
+// Every query is timed on its own; the counters give mean, median and p99 per query in
+// microseconds, and a hash of the answers shows both runs computed the same thing.
+#include "kernel/mesh_bvh.h"
+#include "kernel/mesh_collision.h"
+#include "kernel/mesh_distance.h"
+#include "mesh_io/mesh_file_reader.h"
+#include "tests/support/random_meshes.h"
+
+#include <benchmark/benchmark.h>
+#include <fcl/narrowphase/collision.h>
+#include <fcl/narrowphase/distance.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace {
+
+using gk::RigidTransform;
+using gk::Vec3;
+using Clock = std::chrono::steady_clock;
+using FclModel = fcl::BVHModel<fcl::OBBRSSd>;
+
+struct Subject {
+  std::shared_ptr<gk::MeshBvh> ours;
+  std::shared_ptr<FclModel> fcl;
+};
+
+std::shared_ptr<FclModel> make_fcl(const gk::TriangleMesh& mesh) {
+  auto model = std::make_shared<FclModel>();
+  std::vector<fcl::Vector3d> points;
+  for (const Vec3& v : mesh.vertices()) points.emplace_back(v.x(), v.y(), v.z());
+  std::vector<fcl::Triangle> triangles;
+  for (const auto& f : mesh.faces()) triangles.emplace_back(f[0], f[1], f[2]);
+  model->beginModel();
+  model->addSubModel(points, triangles);
+  model->endModel();
+  return model;
+}
+
+// Meshes are loaded once; `scale` turns metre-unit robot meshes into millimetres.
+const Subject& subject(const std::string& relative, double scale = 1.0) {
+  static std::map<std::string, Subject> cache;
+  auto it = cache.find(relative);
+  if (it != cache.end()) return it->second;
+  auto mesh = gk::mesh_io::read_mesh_file(gk::testing::shared_data(relative));
+  if (!mesh.ok()) {
+    std::fprintf(stderr, "%s\n", mesh.error().to_string().c_str());
+    std::exit(2);
+  }
+  gk::TriangleMesh m = std::move(mesh).value();
+  if (scale != 1.0) {
+    std::vector<Vec3> v = m.vertices();
+    for (Vec3& p : v) p *= scale;
+    (void)m.set_vertices(std::move(v));
+  }
+  Subject s;
+  s.ours = gk::MeshBvh::build(gk::testing::share(m)).value();
+  s.fcl = make_fcl(m);
+  return cache.emplace(relative, s).first->second;
+}
+
+fcl::Transform3d to_fcl(const RigidTransform& t) {
+  fcl::Transform3d out = fcl::Transform3d::Identity();
+  out.linear() = t.rotation;
+  out.translation() = t.translation;
+  return out;
+}
+
+// FCL's env/rob procedure: random translations in +-3000 mm, random rotations (fixed seed).
+const std::vector<RigidTransform>& env_rob_poses() {
+  static const std::vector<RigidTransform> poses = [] {
+    gk::testing::Rng rng(20240601);
+    std::vector<RigidTransform> p;
+    for (int i = 0; i < 10000; ++i) p.push_back(gk::testing::random_pose(rng, 3000.0));
+    return p;
+  }();
+  return poses;
+}
+
+struct Timings {
+  std::vector<double> us;
+  void add(Clock::time_point t0) { us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count()); }
+  void report(benchmark::State& state, double checksum) {
+    std::sort(us.begin(), us.end());
+    double total = 0.0;
+    for (double x : us) total += x;
+    state.counters["mean_us"] = total / static_cast<double>(us.size());
+    state.counters["median_us"] = us[us.size() / 2];
+    state.counters["p99_us"] = us[us.size() * 99 / 100];
+    state.counters["queries"] = static_cast<double>(us.size());
+    state.counters["checksum"] = checksum;
+  }
+};
+
+// --- env/rob ------------------------------------------------------------------------------------
+
+void BM_EnvRob_Collide_Ours(benchmark::State& state) {
+  const Subject& env = subject("meshes/fcl/env.obj");
+  const Subject& rob = subject("meshes/fcl/rob.obj");
+  gk::CollisionRequest req;
+  req.all_contacts = true;
+  Timings t;
+  double contacts = 0;
+  for (auto _ : state) {
+    contacts = 0;
+    for (const RigidTransform& pose : env_rob_poses()) {
+      const auto t0 = Clock::now();
+      auto r = gk::collide(*env.ours, pose, *rob.ours, RigidTransform{}, req);
+      t.add(t0);
+      contacts += static_cast<double>(r.value().contacts.size());
+    }
+  }
+  t.report(state, contacts);
+}
+
+void BM_EnvRob_Collide_Fcl(benchmark::State& state) {
+  const Subject& env = subject("meshes/fcl/env.obj");
+  const Subject& rob = subject("meshes/fcl/rob.obj");
+  fcl::CollisionRequestd req(1000000, true);
+  Timings t;
+  double contacts = 0;
+  for (auto _ : state) {
+    contacts = 0;
+    for (const RigidTransform& pose : env_rob_poses()) {
+      const auto t0 = Clock::now();
+      fcl::CollisionResultd res;
+      fcl::collide(env.fcl.get(), to_fcl(pose), rob.fcl.get(), fcl::Transform3d::Identity(), req, res);
+      t.add(t0);
+      contacts += static_cast<double>(res.numContacts());
+    }
+  }
+  t.report(state, contacts);
+}
+
+void BM_EnvRob_Distance_Ours(benchmark::State& state) {
+  const Subject& env = subject("meshes/fcl/env.obj");
+  const Subject& rob = subject("meshes/fcl/rob.obj");
+  Timings t;
+  double sum = 0, node_pairs = 0, triangle_pairs = 0;
+  for (auto _ : state) {
+    sum = 0;
+    for (const RigidTransform& pose : env_rob_poses()) {
+      const auto t0 = Clock::now();
+      auto r = gk::distance(*env.ours, pose, *rob.ours, RigidTransform{});
+      t.add(t0);
+      sum += r.value().distance_mm;
+      node_pairs += static_cast<double>(r.value().stats.node_pairs_tested);
+      triangle_pairs += static_cast<double>(r.value().stats.triangle_pairs_tested);
+    }
+  }
+  t.report(state, sum);
+  state.counters["node_pairs"] = node_pairs / static_cast<double>(t.us.size());
+  state.counters["triangle_pairs"] = triangle_pairs / static_cast<double>(t.us.size());
+}
+
+void BM_EnvRob_Distance_Fcl(benchmark::State& state) {
+  const Subject& env = subject("meshes/fcl/env.obj");
+  const Subject& rob = subject("meshes/fcl/rob.obj");
+  fcl::DistanceRequestd req(true);
+  Timings t;
+  double sum = 0;
+  for (auto _ : state) {
+    sum = 0;
+    for (const RigidTransform& pose : env_rob_poses()) {
+      const auto t0 = Clock::now();
+      fcl::DistanceResultd res;
+      fcl::distance(env.fcl.get(), to_fcl(pose), rob.fcl.get(), fcl::Transform3d::Identity(), req, res);
+      t.add(t0);
+      sum += std::max(res.min_distance, 0.0);
+    }
+  }
+  t.report(state, sum);
+}
+
+// --- large real meshes near contact ------------------------------------------------------------
+
+struct LargePair {
+  const char* a;
+  double scale_a;
+  const char* b;
+  double scale_b;
+};
+
+const LargePair kLargePairs[] = {
+    {"meshes/occt/TR12J_OCC64K.stl", 1.0, "meshes/robots/kuka_kr10r1420/visual/base_link.stl", 1000.0},
+    {"meshes/cgal/fandisk_large.off", 100.0, "meshes/occt/TR12J_OCC64K.stl", 1.0},
+};
+
+// Poses of B near A: a random orientation and direction, then moved along the witness direction
+// so the gap is uniform in [-1, 3] mm (negative: interpenetrating). Prepared outside the timing.
+const std::vector<RigidTransform>& near_contact_poses(int pair_index) {
+  static std::map<int, std::vector<RigidTransform>> cache;
+  auto it = cache.find(pair_index);
+  if (it != cache.end()) return it->second;
+  const LargePair& p = kLargePairs[pair_index];
+  const Subject& a = subject(p.a, p.scale_a);
+  const Subject& b = subject(p.b, p.scale_b);
+  gk::testing::Rng rng(static_cast<unsigned>(1000 + pair_index));
+  std::uniform_real_distribution<double> gap(-1.0, 3.0);
+  std::vector<RigidTransform> poses;
+  const Vec3 ca = a.ours->root_bounds().center();
+  const Vec3 cb = b.ours->root_bounds().center();
+  const double reach = a.ours->root_bounds().diagonal().norm() + b.ours->root_bounds().diagonal().norm();
+  while (poses.size() < 100) {
+    RigidTransform pose = gk::testing::random_pose(rng, 0.0);
+    const Vec3 dir = Vec3::Random().normalized();
+    pose.translation = ca + dir * reach - pose.rotation * cb;
+    const auto d = gk::distance(*a.ours, RigidTransform{}, *b.ours, pose).value();
+    const Vec3 u = (d.point_b - d.point_a).normalized();
+    pose.translation -= (d.distance_mm - gap(rng)) * u;
+    poses.push_back(pose);
+  }
+  return cache.emplace(pair_index, poses).first->second;
+}
+
+void BM_Large_Collide_Ours(benchmark::State& state) {
+  const int i = static_cast<int>(state.range(0));
+  const Subject& a = subject(kLargePairs[i].a, kLargePairs[i].scale_a);
+  const Subject& b = subject(kLargePairs[i].b, kLargePairs[i].scale_b);
+  const auto& poses = near_contact_poses(i);
+  gk::CollisionRequest req;
+  req.all_contacts = true;
+  Timings t;
+  double contacts = 0;
+  for (auto _ : state) {
+    contacts = 0;
+    for (const RigidTransform& pose : poses) {
+      const auto t0 = Clock::now();
+      auto r = gk::collide(*a.ours, RigidTransform{}, *b.ours, pose, req);
+      t.add(t0);
+      contacts += static_cast<double>(r.value().contacts.size());
+    }
+  }
+  t.report(state, contacts);
+}
+
+void BM_Large_Collide_Fcl(benchmark::State& state) {
+  const int i = static_cast<int>(state.range(0));
+  const Subject& a = subject(kLargePairs[i].a, kLargePairs[i].scale_a);
+  const Subject& b = subject(kLargePairs[i].b, kLargePairs[i].scale_b);
+  const auto& poses = near_contact_poses(i);
+  fcl::CollisionRequestd req(1000000, true);
+  Timings t;
+  double contacts = 0;
+  for (auto _ : state) {
+    contacts = 0;
+    for (const RigidTransform& pose : poses) {
+      const auto t0 = Clock::now();
+      fcl::CollisionResultd res;
+      fcl::collide(a.fcl.get(), fcl::Transform3d::Identity(), b.fcl.get(), to_fcl(pose), req, res);
+      t.add(t0);
+      contacts += static_cast<double>(res.numContacts());
+    }
+  }
+  t.report(state, contacts);
+}
+
+void BM_Large_Distance_Ours(benchmark::State& state) {
+  const int i = static_cast<int>(state.range(0));
+  const Subject& a = subject(kLargePairs[i].a, kLargePairs[i].scale_a);
+  const Subject& b = subject(kLargePairs[i].b, kLargePairs[i].scale_b);
+  const auto& poses = near_contact_poses(i);
+  Timings t;
+  double sum = 0;
+  for (auto _ : state) {
+    sum = 0;
+    for (const RigidTransform& pose : poses) {
+      const auto t0 = Clock::now();
+      auto r = gk::distance(*a.ours, RigidTransform{}, *b.ours, pose);
+      t.add(t0);
+      sum += r.value().distance_mm;
+    }
+  }
+  t.report(state, sum);
+}
+
+void BM_Large_Distance_Fcl(benchmark::State& state) {
+  const int i = static_cast<int>(state.range(0));
+  const Subject& a = subject(kLargePairs[i].a, kLargePairs[i].scale_a);
+  const Subject& b = subject(kLargePairs[i].b, kLargePairs[i].scale_b);
+  const auto& poses = near_contact_poses(i);
+  fcl::DistanceRequestd req(true);
+  Timings t;
+  double sum = 0;
+  for (auto _ : state) {
+    sum = 0;
+    for (const RigidTransform& pose : poses) {
+      const auto t0 = Clock::now();
+      fcl::DistanceResultd res;
+      fcl::distance(a.fcl.get(), fcl::Transform3d::Identity(), b.fcl.get(), to_fcl(pose), req, res);
+      t.add(t0);
+      sum += std::max(res.min_distance, 0.0);
+    }
+  }
+  t.report(state, sum);
+}
+
+// --- build and refit ----------------------------------------------------------------------------
+
+void BM_Build_Ours(benchmark::State& state) {
+  auto mesh = gk::mesh_io::read_mesh_file(gk::testing::shared_data("meshes/occt/TR12J_OCC64K.stl")).value();
+  auto shared = gk::testing::share(mesh);
+  for (auto _ : state) benchmark::DoNotOptimize(gk::MeshBvh::build(shared));
+  state.counters["triangles"] = static_cast<double>(mesh.triangle_count());
+  state.counters["ms_per_100k_triangles"] = benchmark::Counter(
+      static_cast<double>(mesh.triangle_count()) / 1e5, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
+void BM_Build_Fcl(benchmark::State& state) {
+  auto mesh = gk::mesh_io::read_mesh_file(gk::testing::shared_data("meshes/occt/TR12J_OCC64K.stl")).value();
+  for (auto _ : state) benchmark::DoNotOptimize(make_fcl(mesh));
+  state.counters["triangles"] = static_cast<double>(mesh.triangle_count());
+}
+
+void BM_Refit_Ours(benchmark::State& state) {
+  auto mesh = gk::mesh_io::read_mesh_file(gk::testing::shared_data("meshes/occt/TR12J_OCC64K.stl")).value();
+  auto bvh = gk::MeshBvh::build(gk::testing::share(mesh)).value();
+  std::vector<Vec3> moved = mesh.vertices();
+  for (std::size_t i = 0; i < moved.size(); ++i) moved[i].z() += 0.001 * static_cast<double>(i % 7);
+  gk::TriangleMesh deformed = mesh;
+  (void)deformed.set_vertices(moved);
+  auto shared = gk::testing::share(deformed);
+  for (auto _ : state) bvh->refit(shared);
+  state.counters["triangles"] = static_cast<double>(mesh.triangle_count());
+}
+
+}  // namespace
+
+BENCHMARK(BM_EnvRob_Collide_Ours)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_EnvRob_Collide_Fcl)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_EnvRob_Distance_Ours)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_EnvRob_Distance_Fcl)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_Large_Collide_Ours)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_Large_Collide_Fcl)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_Large_Distance_Ours)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_Large_Distance_Fcl)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_Build_Ours)->Unit(benchmark::kMillisecond)->Iterations(5);
+BENCHMARK(BM_Build_Fcl)->Unit(benchmark::kMillisecond)->Iterations(5);
+BENCHMARK(BM_Refit_Ours)->Unit(benchmark::kMillisecond)->Iterations(20);
+
+BENCHMARK_MAIN();
