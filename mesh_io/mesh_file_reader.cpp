@@ -4,16 +4,43 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <cmath>
 #include <filesystem>
+#include <optional>
+#include <string>
 
 namespace gk::mesh_io {
 namespace {
 
-unsigned int import_flags(const ReadOptions& options) {
-  // Normals would keep STL corners apart when joining vertices: drop them, we do not use them.
-  unsigned int flags = aiProcess_Triangulate | aiProcess_DropNormals | aiProcess_PreTransformVertices;
-  if (options.merge_identical_vertices) flags |= aiProcess_JoinIdenticalVertices;
-  return flags;
+// Normals would keep STL corners apart when joining vertices: drop them, we do not use them.
+// Joining runs only after the coordinates were checked: Assimp would merge a NaN corner into a
+// finite one and hide it.
+constexpr unsigned int kImportFlags = aiProcess_Triangulate | aiProcess_DropNormals | aiProcess_PreTransformVertices;
+
+// The first non-finite coordinate in the scene, as an error naming where it is.
+std::optional<Error> find_non_finite(const aiScene* scene, const std::string& source) {
+  for (unsigned int m = 0; m < scene->mNumMeshes; ++m) {
+    const aiMesh* mesh = scene->mMeshes[m];
+    for (unsigned int v = 0; v < mesh->mNumVertices; ++v) {
+      const aiVector3D& p = mesh->mVertices[v];
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+        return invalid_argument(source + ": meshes[" + std::to_string(m) + "].vertices[" + std::to_string(v) + "]",
+                                "coordinate is not finite");
+    }
+  }
+  return std::nullopt;
+}
+
+Result<const aiScene*> checked_scene(Assimp::Importer& importer, const aiScene* scene, const std::string& source,
+                                     const ReadOptions& options) {
+  if (scene == nullptr || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
+    return invalid_argument(source, std::string("cannot read mesh file: ") + importer.GetErrorString());
+  if (auto bad = find_non_finite(scene, source)) return *bad;
+  if (options.merge_identical_vertices) {
+    scene = importer.ApplyPostProcessing(aiProcess_JoinIdenticalVertices);
+    if (scene == nullptr) return invalid_argument(source, std::string("cannot merge vertices: ") + importer.GetErrorString());
+  }
+  return scene;
 }
 
 Result<TriangleMesh> convert(const aiScene* scene, const std::string& source, const ReadOptions& options) {
@@ -45,20 +72,19 @@ Result<TriangleMesh> read_mesh_file(const std::string& path, const ReadOptions& 
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) return invalid_argument(path, "no such file");
   Assimp::Importer importer;
-  const aiScene* scene = importer.ReadFile(path, import_flags(options));
-  if (scene == nullptr || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
-    return invalid_argument(path, std::string("cannot read mesh file: ") + importer.GetErrorString());
-  return convert(scene, path, options);
+  auto scene = checked_scene(importer, importer.ReadFile(path, kImportFlags), path, options);
+  if (!scene.ok()) return scene.error();
+  return convert(scene.value(), path, options);
 }
 
 Result<TriangleMesh> read_mesh_bytes(const std::string& bytes, const std::string& format_hint,
                                      const ReadOptions& options) {
   if (bytes.empty()) return invalid_argument("bytes", "empty mesh payload");
   Assimp::Importer importer;
-  const aiScene* scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(), import_flags(options), format_hint.c_str());
-  if (scene == nullptr || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
-    return invalid_argument("bytes", std::string("cannot read ") + format_hint + " mesh: " + importer.GetErrorString());
-  return convert(scene, "bytes", options);
+  const aiScene* raw = importer.ReadFileFromMemory(bytes.data(), bytes.size(), kImportFlags, format_hint.c_str());
+  auto scene = checked_scene(importer, raw, "bytes (" + format_hint + ")", options);
+  if (!scene.ok()) return scene.error();
+  return convert(scene.value(), "bytes", options);
 }
 
 }  // namespace gk::mesh_io
