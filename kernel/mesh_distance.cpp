@@ -7,6 +7,7 @@
 #include <cmath>
 #include <string>
 #include <tuple>
+#include <vector>
 
 namespace gk {
 namespace {
@@ -32,13 +33,19 @@ Result<DistanceResult> distance(const MeshBvh& a, const RigidTransform& pose_a, 
   int best_ka = -1, best_kb = -1;
   Vec3 best_pa = Vec3::Zero(), best_pb = Vec3::Zero();
 
-  std::array<BoundedPair, 2 * 64 + 4> stack;
-  int top = 0;
-  stack[top++] = {0, 0, frame.nodes_lower_bound(0, 0)};
+  // Best-first: always expand the pair with the smallest lower bound, so the first leaves reached
+  // are the likely nearest and the bound tightens before the rest is looked at. The queue is a
+  // per-thread buffer reused across queries.
+  thread_local std::vector<BoundedPair> queue;
+  queue.clear();
+  const auto farther = [](const BoundedPair& x, const BoundedPair& y) { return x.lower_bound > y.lower_bound; };
+  queue.push_back({0, 0, frame.nodes_lower_bound(0, 0)});
   ++result.stats.node_pairs_tested;
-  while (top > 0) {
-    const BoundedPair p = stack[--top];
-    if (p.lower_bound >= best) continue;  // prune: nothing in here can be closer
+  while (!queue.empty()) {
+    std::pop_heap(queue.begin(), queue.end(), farther);
+    const BoundedPair p = queue.back();
+    queue.pop_back();
+    if (p.lower_bound >= best) break;  // every pair left is at least this far: done
     const bool leaf_a = frame.is_leaf_a(p.a), leaf_b = frame.is_leaf_b(p.b);
     if (leaf_a && leaf_b) {
       for (int kb = frame.begin_b(p.b); kb <= frame.end_b(p.b); ++kb) {
@@ -61,7 +68,7 @@ Result<DistanceResult> distance(const MeshBvh& a, const RigidTransform& pose_a, 
       }
       continue;
     }
-    // Split the larger node; visit the nearer child pair first so the bound tightens early.
+    // Split the larger node.
     BoundedPair first, second;
     const bool split_a = !leaf_a && (leaf_b || frame.size_a(p.a) >= frame.size_b(p.b));
     if (split_a) {
@@ -71,12 +78,15 @@ Result<DistanceResult> distance(const MeshBvh& a, const RigidTransform& pose_a, 
       first = {p.a, frame.first_child_b(p.b), 0.0};
       second = {p.a, frame.second_child_b(p.b), 0.0};
     }
-    first.lower_bound = frame.nodes_lower_bound(first.a, first.b);
-    second.lower_bound = frame.nodes_lower_bound(second.a, second.b);
+    first.lower_bound = frame.pair_lower_bound(first.a, first.b);
+    second.lower_bound = frame.pair_lower_bound(second.a, second.b);
     result.stats.node_pairs_tested += 2;
-    if (first.lower_bound > second.lower_bound) std::swap(first, second);
-    if (second.lower_bound < best) stack[top++] = second;
-    if (first.lower_bound < best) stack[top++] = first;
+    for (const BoundedPair& child : {first, second}) {
+      if (child.lower_bound < best) {
+        queue.push_back(child);
+        std::push_heap(queue.begin(), queue.end(), farther);
+      }
+    }
   }
 
   if (best_ka >= 0) {
@@ -105,7 +115,7 @@ Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pos
   while (top > 0) {
     const auto [na, nb] = stack[--top];
     ++result.stats.node_pairs_tested;
-    if (frame.nodes_lower_bound(na, nb) > delta_mm) continue;
+    if (frame.pair_lower_bound(na, nb) > delta_mm) continue;
     const bool leaf_a = frame.is_leaf_a(na), leaf_b = frame.is_leaf_b(nb);
     if (leaf_a && leaf_b) {
       for (int kb = frame.begin_b(nb); kb <= frame.end_b(nb); ++kb) {

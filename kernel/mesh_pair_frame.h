@@ -7,9 +7,11 @@
 #include "kernel/rigid_transform.h"
 #include "kernel/status.h"
 #include "kernel/tolerances.h"
+#include "kernel/triangle_distance.h"
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 namespace gk {
@@ -68,6 +70,29 @@ class MeshPairFrame {
     return std::max(std::max(gap_a.norm(), gap_b.norm()) - slack_, 0.0);
   }
 
+  // The box bound, tightened when exactly one side is a leaf: the leaf's triangles against the
+  // other node's bounding sphere. This keeps a small, dense mesh from being opened in full under
+  // every large triangle whose box comes near it.
+  double pair_lower_bound(int node_a, int node_b) const {
+    const double box = nodes_lower_bound(node_a, node_b);
+    const bool leaf_a = is_leaf_a(node_a), leaf_b = is_leaf_b(node_b);
+    if (leaf_a == leaf_b) return box;
+    double nearest = std::numeric_limits<double>::infinity();
+    double radius;
+    if (leaf_a) {
+      const Vec3 c = b_in_a_.apply(b_->node_center(node_b));
+      radius = b_->node_half_extent(node_b).norm();
+      for (int k = begin_a(node_a); k <= end_a(node_a); ++k)
+        nearest = std::min(nearest, (closest_point_on_triangle(c, a_->ordered_triangle(k)) - c).norm());
+    } else {
+      const Vec3 c = a_in_b_.apply(a_->node_center(node_a));
+      radius = a_->node_half_extent(node_a).norm();
+      for (int k = begin_b(node_b); k <= end_b(node_b); ++k)
+        nearest = std::min(nearest, (closest_point_on_triangle(c, b_->ordered_triangle(k)) - c).norm());
+    }
+    return std::max(box, nearest - radius - slack_);
+  }
+
   Triangle b_triangle_in_a(int ordered_b) const {
     const Triangle& t = b_->ordered_triangle(ordered_b);
     return {b_in_a_.apply(t[0]), b_in_a_.apply(t[1]), b_in_a_.apply(t[2])};
@@ -79,6 +104,7 @@ class MeshPairFrame {
   MeshPairFrame(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b, const RigidTransform& pose_b)
       : a_(&a), b_(&b), na_(a.nodes()), nb_(b.nodes()), pose_a_(pose_a), b_in_a_(relative_transform(pose_a, pose_b)) {
     abs_r_ = abs_with_epsilon(b_in_a_.rotation);
+    a_in_b_ = b_in_a_.inverse();
     // Rounding in a box test is relative to the magnitude of the coordinates involved.
     const Aabb ra = a.root_bounds(), rb = b.root_bounds();
     const double scale = std::max({ra.min.cwiseAbs().maxCoeff(), ra.max.cwiseAbs().maxCoeff(),
@@ -94,6 +120,7 @@ class MeshPairFrame {
   MeshBvh::NodeView na_, nb_;
   RigidTransform pose_a_;
   RigidTransform b_in_a_;
+  RigidTransform a_in_b_;
   Mat3 abs_r_;
   double slack_ = 0.0;
 };
