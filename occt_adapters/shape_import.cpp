@@ -1,0 +1,102 @@
+#include "occt_adapters/shape_import.h"
+
+#include "occt_adapters/occt_errors.h"
+#include "occt_adapters/shape_impl.h"
+
+#include <BRepTools.hxx>
+#include <BRep_Builder.hxx>
+#include <IFSelect_ReturnStatus.hxx>
+#include <IGESControl_Reader.hxx>
+#include <Message.hxx>
+#include <Message_Messenger.hxx>
+#include <STEPControl_Reader.hxx>
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
+
+namespace gk::occt {
+namespace {
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext.empty() ? ext : ext.substr(1);
+}
+
+// OCCT's readers print statistics to stdout by default: keep them quiet.
+void silence_occt_messages() {
+  static std::atomic<bool> done{false};
+  if (done.exchange(true)) return;
+  Message::DefaultMessenger()->RemovePrinters(STANDARD_TYPE(Message_Printer));
+}
+
+template <typename Reader>
+Result<Shape> read_with_xs_reader(const std::string& path, const char* kind) {
+  TopoDS_Shape shape;
+  IFSelect_ReturnStatus status = IFSelect_RetVoid;
+  auto ran = guarded(path, std::string("reading ") + kind, [&] {
+    Reader reader;
+    status = reader.ReadFile(path.c_str());
+    if (status != IFSelect_RetDone) return;
+    reader.TransferRoots();
+    shape = reader.OneShape();
+  });
+  if (!ran.ok()) return ran.error();
+  if (status != IFSelect_RetDone) return invalid_argument(path, std::string("not a readable ") + kind + " file");
+  if (shape.IsNull()) return invalid_argument(path, std::string(kind) + " file holds no shape");
+  return wrap(shape);
+}
+
+Result<Shape> read_brep(const std::string& path) {
+  TopoDS_Shape shape;
+  bool ok = false;
+  auto ran = guarded(path, "reading BREP", [&] {
+    BRep_Builder builder;
+    ok = BRepTools::Read(shape, path.c_str(), builder);
+  });
+  if (!ran.ok()) return ran.error();
+  if (!ok || shape.IsNull()) return invalid_argument(path, "not a readable BREP file");
+  return wrap(shape);
+}
+
+}  // namespace
+
+Result<Shape> read_shape_file(const std::string& path) {
+  silence_occt_messages();
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return invalid_argument(path, "no such file");
+  if (std::filesystem::file_size(path, ec) == 0) return invalid_argument(path, "file is empty");
+  const std::string ext = lower_extension(path);
+  Result<Shape> shape = invalid_argument(path, "unknown CAD format '" + ext + "' (expected step, stp, brep, igs, iges)");
+  if (ext == "step" || ext == "stp") shape = read_with_xs_reader<STEPControl_Reader>(path, "STEP");
+  else if (ext == "igs" || ext == "iges") shape = read_with_xs_reader<IGESControl_Reader>(path, "IGES");
+  else if (ext == "brep") shape = read_brep(path);
+  if (!shape.ok()) return shape;
+  if (shape.value().face_count() == 0) return invalid_argument(path, "shape has no faces");
+  return shape;
+}
+
+Result<Shape> read_shape_bytes(const std::string& bytes, const std::string& format) {
+  if (bytes.empty()) return invalid_argument("bytes", "empty CAD payload");
+  // The STEP and IGES readers take files: stage the bytes in a private temporary file.
+  static std::atomic<long> counter{0};
+  const auto dir = std::filesystem::temp_directory_path();
+  const std::string path =
+      (dir / ("gk-import-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + "." + format)).string();
+  {
+    std::ofstream out(path, std::ios::binary);
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    if (!out) return invalid_argument("bytes", "cannot stage the payload in " + dir.string());
+  }
+  auto shape = read_shape_file(path);
+  std::error_code ec;
+  std::filesystem::remove(path, ec);
+  if (!shape.ok()) return invalid_argument("bytes (" + format + ")", shape.error().message);
+  return shape;
+}
+
+}  // namespace gk::occt

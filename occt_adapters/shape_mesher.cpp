@@ -1,0 +1,62 @@
+#include "occt_adapters/shape_mesher.h"
+
+#include "occt_adapters/occt_errors.h"
+#include "occt_adapters/shape_impl.h"
+
+#include <BRepBuilderAPI_Copy.hxx>
+#include <BRepMesh_IncrementalMesh.hxx>
+#include <BRep_Tool.hxx>
+#include <Poly_Triangulation.hxx>
+#include <TopExp.hxx>
+#include <TopLoc_Location.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Face.hxx>
+
+#include <cmath>
+#include <string>
+
+namespace gk::occt {
+
+Result<MeshedShape> mesh_shape(const Shape& shape, double deflection_mm, double angular_deg) {
+  if (shape.is_null()) return invalid_argument("shape", "is empty");
+  if (!(deflection_mm > 0.0) || !std::isfinite(deflection_mm))
+    return invalid_argument("deflection_mm", "must be a positive length");
+  if (!(angular_deg > 0.0 && angular_deg <= 90.0)) return invalid_argument("angular_deg", "must be in (0, 90]");
+  std::vector<Vec3> vertices;
+  std::vector<TriangleMesh::Face> faces;
+  std::vector<int> face_ids;
+  auto ran = guarded("shape", "meshing", [&] {
+    const TopoDS_Shape copy = BRepBuilderAPI_Copy(shape.impl().shape, true, false).Shape();
+    BRepMesh_IncrementalMesh mesher(copy, deflection_mm, false, angular_deg * M_PI / 180.0, false);
+    TopTools_IndexedMapOfShape face_map;
+    TopExp::MapShapes(copy, TopAbs_FACE, face_map);
+    for (int f = 1; f <= face_map.Extent(); ++f) {
+      const TopoDS_Face& face = TopoDS::Face(face_map(f));
+      TopLoc_Location location;
+      const Handle(Poly_Triangulation) tri = BRep_Tool::Triangulation(face, location);
+      if (tri.IsNull()) continue;
+      const gp_Trsf trsf = location.Transformation();
+      const auto base = static_cast<std::uint32_t>(vertices.size());
+      for (int n = 1; n <= tri->NbNodes(); ++n) {
+        const gp_Pnt p = tri->Node(n).Transformed(trsf);
+        vertices.emplace_back(p.X(), p.Y(), p.Z());
+      }
+      const bool reversed = face.Orientation() == TopAbs_REVERSED;
+      for (int t = 1; t <= tri->NbTriangles(); ++t) {
+        int a, b, c;
+        tri->Triangle(t).Get(a, b, c);
+        if (reversed) std::swap(b, c);
+        faces.push_back({base + a - 1, base + b - 1, base + c - 1});
+        face_ids.push_back(f);
+      }
+    }
+  });
+  if (!ran.ok()) return ran.error();
+  if (faces.empty()) return invalid_argument("shape", "meshing produced no triangles");
+  auto mesh = TriangleMesh::create(std::move(vertices), std::move(faces));
+  if (!mesh.ok()) return mesh.error();
+  return MeshedShape{std::move(mesh).value(), std::move(face_ids), deflection_mm};
+}
+
+}  // namespace gk::occt

@@ -1,0 +1,171 @@
+// OCCT adapters on real files and shapes: import with clear errors, meshing with face ids, swept
+// solids with their analytic volumes, and exact distance and common volume.
+#include "kernel/mesh_bvh.h"
+#include "kernel/mesh_distance.h"
+#include "occt_adapters/exact_measures.h"
+#include "occt_adapters/shape_builders.h"
+#include "occt_adapters/shape_import.h"
+#include "occt_adapters/shape_mesher.h"
+#include "tests/support/random_meshes.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+namespace gk::occt {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+std::string write_temp(const std::string& name, const std::string& bytes) {
+  const auto path = std::filesystem::temp_directory_path() / ("gk-occt-test-" + name);
+  std::ofstream(path, std::ios::binary) << bytes;
+  return path.string();
+}
+
+TEST(ShapeImport, ReadsTheSharedStepBrepFiles) {
+  struct Case {
+    const char* file;
+    int min_faces;
+  };
+  for (const Case& c : {Case{"step/occt/screw.step", 10}, Case{"step/occt/Pump_Nut.brep", 25},
+                        Case{"step/occt/bottle.brep", 71}, Case{"step/occt/Pump_TopCover.brep", 8},
+                        Case{"step/gmsh/as1-tu-203.stp", 10}}) {
+    auto shape = read_shape_file(testing::shared_data(c.file));
+    ASSERT_TRUE(shape.ok()) << c.file << ": " << shape.error().to_string();
+    EXPECT_GE(shape.value().face_count(), c.min_faces) << c.file;
+    EXPECT_FALSE(shape.value().bounds().empty()) << c.file;
+  }
+}
+
+TEST(ShapeImport, BrokenFilesGiveClearErrors) {
+  auto missing = read_shape_file("/nonexistent/part.step");
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.error().message.find("no such file"), std::string::npos);
+  const std::string garbage = write_temp("garbage.step", "ISO-10303-21;\nthis is not a STEP file\n");
+  auto bad = read_shape_file(garbage);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.error().field, garbage);
+  auto empty = read_shape_file(write_temp("empty.brep", ""));
+  ASSERT_FALSE(empty.ok());
+  auto bad_brep = read_shape_file(write_temp("bad.brep", "DBRep_DrawableShape\nCASCADE Topology V1\nnonsense"));
+  ASSERT_FALSE(bad_brep.ok());
+  auto bad_iges = read_shape_file(write_temp("bad.igs", std::string(200, 'x')));
+  ASSERT_FALSE(bad_iges.ok());
+  auto unknown = read_shape_file(write_temp("part.xyz", "x"));
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_NE(unknown.error().message.find("unknown CAD format"), std::string::npos);
+  // A truncated copy of a real STEP file.
+  std::ifstream in(testing::shared_data("step/occt/screw.step"), std::ios::binary);
+  std::string whole((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  auto truncated = read_shape_bytes(whole.substr(0, whole.size() / 3), "step");
+  EXPECT_FALSE(truncated.ok() && truncated.value().face_count() >= 10) << "a third of a STEP file is not the whole part";
+  auto from_bytes = read_shape_bytes(whole, "step");
+  ASSERT_TRUE(from_bytes.ok());
+  EXPECT_EQ(from_bytes.value().face_count(), read_shape_file(testing::shared_data("step/occt/screw.step")).value().face_count());
+}
+
+TEST(ShapeMesher, KeepsFaceIdsAndStaysWithinTheDeflection) {
+  auto shape = read_shape_file(testing::shared_data("step/occt/Pump_Nut.brep")).value();
+  for (double deflection : {0.5, 0.05}) {
+    auto meshed = mesh_shape(shape, deflection);
+    ASSERT_TRUE(meshed.ok()) << meshed.error().to_string();
+    const MeshedShape& m = meshed.value();
+    ASSERT_EQ(m.face_of_triangle.size(), m.mesh.triangle_count());
+    for (int id : m.face_of_triangle) {
+      EXPECT_GE(id, 1);
+      EXPECT_LE(id, shape.face_count());
+    }
+    // Every mesh vertex lies on the exact surface to within OCCT's tolerances (vertices are
+    // sampled on the surface; the deflection bounds the triangles' interiors).
+    for (std::size_t i = 0; i < m.mesh.vertices().size(); i += 97) {
+      auto point = make_box(m.mesh.vertices()[i] - Vec3::Constant(1e-6), m.mesh.vertices()[i] + Vec3::Constant(1e-6));
+      const double d = exact_distance(shape, point.value()).value().distance_mm;
+      EXPECT_LE(d, 1e-3) << "vertex " << i;  // tolerance: OCCT edge/vertex tolerance, 1e-3 mm
+    }
+  }
+  EXPECT_FALSE(mesh_shape(shape, 0.0).ok());
+  EXPECT_FALSE(mesh_shape(Shape(), 0.1).ok());
+}
+
+TEST(SweptSolids, RevolvedRectangleIsAQuarterCylinder) {
+  auto face = make_rectangle(Vec3(0, 0, 0), Vec3(100, 0, 0), Vec3(0, 0, 50)).value();
+  auto swept = revolve(face, Vec3::Zero(), Vec3::UnitX(), 90.0);
+  ASSERT_TRUE(swept.ok()) << swept.error().to_string();
+  EXPECT_NEAR(swept.value().volume(), 100.0 * kPi * 50.0 * 50.0 / 4.0, 1e-6 * 196349.54);  // 1e-6 relative
+  // A 2 mm plate bent up 90 degrees about its top edge (a flange): swept through its boundary, the
+  // sweep reaches y = hypot(40, 2) (the far bottom corner's arc) and z = 2 + 40 (the flange upright).
+  auto plate = make_box(Vec3(0, 0, 0), Vec3(100, 40, 2)).value();
+  auto bent = revolve(plate, Vec3(0, 0, 2), Vec3::UnitX(), 90.0);
+  ASSERT_TRUE(bent.ok()) << bent.error().to_string();
+  const Aabb box = bent.value().bounds();
+  EXPECT_NEAR(box.max.y(), std::hypot(40.0, 2.0), 0.05);  // tolerance: OCCT's box enlargement
+  EXPECT_NEAR(box.max.z(), 42.0, 0.05);
+  EXPECT_NEAR(box.min.z(), 0.0, 0.05);
+  EXPECT_NEAR(box.min.y(), 0.0, 0.05);
+}
+
+TEST(SweptSolids, AnglesAndAxesAreValidated) {
+  auto face = make_rectangle(Vec3(0, 0, 0), Vec3(100, 0, 0), Vec3(0, 0, 50)).value();
+  auto wrapped = revolve(face, Vec3::Zero(), Vec3::UnitX(), 540.0);
+  ASSERT_FALSE(wrapped.ok());
+  EXPECT_EQ(wrapped.error().field, "angle_deg");
+  EXPECT_FALSE(revolve(face, Vec3::Zero(), Vec3::UnitX(), std::nan("")).ok());
+  EXPECT_FALSE(revolve(face, Vec3::Zero(), Vec3::UnitX(), 0.0).ok());
+  EXPECT_FALSE(revolve(face, Vec3::Zero(), Vec3::Zero(), 30.0).ok());
+  auto box = make_box(Vec3(-1, -1, -1), Vec3(1, 1, 1)).value();
+  auto through = revolve(box, Vec3::Zero(), Vec3::UnitZ(), 45.0);  // the axis crosses the interior
+  if (through.ok()) {
+    // Swept through its boundary: corners (1, -1) and (1, 1) reach x = y = sqrt 2 at 45 degrees.
+    EXPECT_NEAR(through.value().bounds().max.x(), std::sqrt(2.0), 0.05);
+    EXPECT_NEAR(through.value().bounds().max.y(), std::sqrt(2.0), 0.05);
+  } else {
+    EXPECT_EQ(through.error().field, "axis");
+  }
+}
+
+TEST(SweptSolids, ExtrudedBoxHasItsVolume) {
+  auto face = make_rectangle(Vec3(0, 0, 0), Vec3(10, 0, 0), Vec3(0, 20, 0)).value();
+  auto prism = extrude(face, Vec3(0, 0, 5));
+  ASSERT_TRUE(prism.ok());
+  EXPECT_NEAR(prism.value().volume(), 1000.0, 1e-9);
+  EXPECT_FALSE(extrude(face, Vec3::Zero()).ok());
+}
+
+TEST(ExactMeasures, BoxDistanceAndCommonVolumeAreAnalytic) {
+  auto a = make_box(Vec3(0, 0, 0), Vec3(10, 10, 10)).value();
+  auto b = make_box(Vec3(13, 4, 4), Vec3(20, 6, 6)).value();
+  auto d = exact_distance(a, b).value();
+  EXPECT_NEAR(d.distance_mm, 3.0, 1e-9);
+  EXPECT_NEAR(interference_volume(a, b).value(), 0.0, 1e-9);
+  auto c = make_box(Vec3(8, 8, 8), Vec3(12, 13, 14)).value();
+  EXPECT_NEAR(exact_distance(a, c).value().distance_mm, 0.0, 1e-12);
+  EXPECT_NEAR(interference_volume(a, c).value(), 2.0 * 2.0 * 2.0, 1e-9);
+}
+
+TEST(ExactMeasures, KernelMeshDistanceMatchesBRepWithinTheDeflection) {
+  auto nut = read_shape_file(testing::shared_data("step/occt/Pump_Nut.brep")).value();
+  auto cover = read_shape_file(testing::shared_data("step/occt/Pump_TopCover.brep")).value();
+  const double deflection = 0.01;
+  const auto nut_mesh = mesh_shape(nut, deflection).value();
+  const auto cover_mesh = mesh_shape(cover, deflection).value();
+  const auto nut_bvh = MeshBvh::build(testing::share(nut_mesh.mesh)).value();
+  const auto cover_bvh = MeshBvh::build(testing::share(cover_mesh.mesh)).value();
+  testing::Rng rng(12);
+  const Aabb nb = nut.bounds(), cb = cover.bounds();
+  for (int trial = 0; trial < 5; ++trial) {
+    RigidTransform pose = testing::random_pose(rng, 0.0);
+    pose.translation = nb.center() - pose.rotation * cb.center() +
+                       Vec3::Random().normalized() * (0.5 * (nb.diagonal().norm() + cb.diagonal().norm()) + 5.0);
+    const auto placed = place(cover, pose).value();
+    const double exact = exact_distance(nut, placed).value().distance_mm;
+    const double meshed = distance(*nut_bvh, {}, *cover_bvh, pose).value().distance_mm;
+    // Both tessellations are within the deflection of their surfaces.
+    EXPECT_NEAR(meshed, exact, 2.0 * deflection + 1e-6) << "trial " << trial;
+  }
+}
+
+}  // namespace
+}  // namespace gk::occt
