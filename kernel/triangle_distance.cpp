@@ -54,38 +54,44 @@ Vec3 closest_point_on_triangle(const Vec3& x, const Triangle& t) {
   return a + ab * v + ac * w;
 }
 
+namespace {
+
+Vec3 closest_point_on_segment(const Vec3& a, const Vec3& b, const Vec3& x) {
+  const Vec3 ab = b - a;
+  const double len2 = ab.squaredNorm();
+  if (!(len2 > 0.0)) return a;
+  return a + std::clamp((x - a).dot(ab) / len2, 0.0, 1.0) * ab;
+}
+
+}  // namespace
+
 void closest_points_on_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1, Vec3& on_p,
                                 Vec3& on_q) {
-  const Vec3 d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
-  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
-  double s = 0.0, t = 0.0;
-  if (a <= 0.0 && e <= 0.0) {
-    on_p = p0;
-    on_q = q0;
-    return;
-  }
-  if (a <= 0.0) {
-    t = std::clamp(f / e, 0.0, 1.0);
-  } else {
-    const double c = d1.dot(r);
-    if (e <= 0.0) {
-      s = std::clamp(-c / a, 0.0, 1.0);
-    } else {
-      const double b = d1.dot(d2);
-      const double denom = a * e - b * b;
-      s = denom > 0.0 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
-      t = (b * s + f) / e;
-      if (t < 0.0) {
-        t = 0.0;
-        s = std::clamp(-c / a, 0.0, 1.0);
-      } else if (t > 1.0) {
-        t = 1.0;
-        s = std::clamp((b - c) / a, 0.0, 1.0);
-      }
+  // The minimum is either between the two interiors (the lines' common perpendicular, when it
+  // falls inside both segments) or has an endpoint on one side. The interior parameters come from
+  // cross products (Goldman), which stay accurate for nearly parallel segments where the textbook
+  // a*e - b*b denominator cancels.
+  double best = std::numeric_limits<double>::infinity();
+  auto consider = [&](const Vec3& a, const Vec3& b) {
+    const double d = (a - b).squaredNorm();
+    if (d < best) {
+      best = d;
+      on_p = a;
+      on_q = b;
     }
+  };
+  const Vec3 d1 = p1 - p0, d2 = q1 - q0, r = q0 - p0;
+  const Vec3 n = d1.cross(d2);
+  const double nn = n.squaredNorm();
+  if (nn > 0.0) {
+    const double s = r.cross(d2).dot(n) / nn;
+    const double t = r.cross(d1).dot(n) / nn;
+    if (s >= 0.0 && s <= 1.0 && t >= 0.0 && t <= 1.0) consider(p0 + s * d1, q0 + t * d2);
   }
-  on_p = p0 + s * d1;
-  on_q = q0 + t * d2;
+  consider(p0, closest_point_on_segment(q0, q1, p0));
+  consider(p1, closest_point_on_segment(q0, q1, p1));
+  consider(closest_point_on_segment(p0, p1, q0), q0);
+  consider(closest_point_on_segment(p0, p1, q1), q1);
 }
 
 namespace {

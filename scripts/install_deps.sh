@@ -17,6 +17,8 @@ PACKAGES=(
   # service
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler grpc-proto
   libspdlog-dev libfmt-dev libsqlite3-dev nlohmann-json3-dev libcli11-dev
+  # machine model files
+  libtomlplusplus-dev
   # python clients
   python3 python3-grpcio python3-protobuf
 )
