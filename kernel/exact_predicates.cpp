@@ -1,5 +1,6 @@
 #include "kernel/exact_predicates.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -16,12 +17,19 @@ constexpr double kCcwErrBoundA = (3.0 + 16.0 * kEpsilon) * kEpsilon;
 constexpr double kO3dErrBoundA = (7.0 + 56.0 * kEpsilon) * kEpsilon;
 
 // A floating-point expansion: a sum of non-overlapping doubles in increasing magnitude.
-// The capacity covers the largest intermediate of orient3d (192 terms).
+// The capacity covers the largest intermediate of orient3d (192 terms); only `size` terms are live.
 struct Expansion {
   static constexpr std::size_t kCapacity = 256;
-  std::array<double, kCapacity> term{};
+  double term[kCapacity];
   std::size_t size = 0;
 
+  Expansion() = default;
+  Expansion(const Expansion& other) : size(other.size) { std::copy(other.term, other.term + other.size, term); }
+  Expansion& operator=(const Expansion& other) {
+    size = other.size;
+    std::copy(other.term, other.term + other.size, term);
+    return *this;
+  }
   void push_nonzero(double x) {
     if (x != 0.0) term[size++] = x;
   }
@@ -73,28 +81,64 @@ inline void two_product(double a, double b, double& x, double& y) {
   y = (alo * blo) - err3;
 }
 
-// h = e + b (Shewchuk's GROW-EXPANSION with zero elimination).
-void grow(const Expansion& e, double b, Expansion& h) {
-  h.size = 0;
-  double q = b;
-  for (std::size_t i = 0; i < e.size; ++i) {
-    double sum, err;
-    two_sum(q, e.term[i], sum, err);
-    q = sum;
-    h.push_nonzero(err);
-  }
-  h.push_nonzero(q);
-}
-
-// h = e + f.
+// h = e + f (Shewchuk's FAST-EXPANSION-SUM with zero elimination: merge by magnitude, then one
+// pass of two-sums). h must not alias e or f.
 void sum(const Expansion& e, const Expansion& f, Expansion& h) {
-  Expansion acc = e;
-  Expansion next;
-  for (std::size_t j = 0; j < f.size; ++j) {
-    grow(acc, f.term[j], next);
-    acc = next;
+  h.size = 0;
+  if (e.size == 0) {
+    h = f;
+    return;
   }
-  h = acc;
+  if (f.size == 0) {
+    h = e;
+    return;
+  }
+  std::size_t ei = 0, fi = 0;
+  double enow = e.term[0], fnow = f.term[0];
+  double q;
+  if ((fnow > enow) == (fnow > -enow)) {
+    q = enow;
+    enow = ++ei < e.size ? e.term[ei] : 0.0;
+  } else {
+    q = fnow;
+    fnow = ++fi < f.size ? f.term[fi] : 0.0;
+  }
+  double qnew, hh;
+  if (ei < e.size && fi < f.size) {
+    if ((fnow > enow) == (fnow > -enow)) {
+      fast_two_sum(enow, q, qnew, hh);
+      enow = ++ei < e.size ? e.term[ei] : 0.0;
+    } else {
+      fast_two_sum(fnow, q, qnew, hh);
+      fnow = ++fi < f.size ? f.term[fi] : 0.0;
+    }
+    q = qnew;
+    h.push_nonzero(hh);
+    while (ei < e.size && fi < f.size) {
+      if ((fnow > enow) == (fnow > -enow)) {
+        two_sum(q, enow, qnew, hh);
+        enow = ++ei < e.size ? e.term[ei] : 0.0;
+      } else {
+        two_sum(q, fnow, qnew, hh);
+        fnow = ++fi < f.size ? f.term[fi] : 0.0;
+      }
+      q = qnew;
+      h.push_nonzero(hh);
+    }
+  }
+  while (ei < e.size) {
+    two_sum(q, enow, qnew, hh);
+    enow = ++ei < e.size ? e.term[ei] : 0.0;
+    q = qnew;
+    h.push_nonzero(hh);
+  }
+  while (fi < f.size) {
+    two_sum(q, fnow, qnew, hh);
+    fnow = ++fi < f.size ? f.term[fi] : 0.0;
+    q = qnew;
+    h.push_nonzero(hh);
+  }
+  if (q != 0.0 || h.size == 0) h.push_nonzero(q);
 }
 
 // h = e * b (Shewchuk's SCALE-EXPANSION with zero elimination).
@@ -117,13 +161,13 @@ void scale(const Expansion& e, double b, Expansion& h) {
 
 // h = e * f.
 void product(const Expansion& e, const Expansion& f, Expansion& h) {
-  Expansion acc, part, next;
+  Expansion part, next;
+  h.size = 0;
   for (std::size_t j = 0; j < f.size; ++j) {
     scale(e, f.term[j], part);
-    sum(acc, part, next);
-    acc = next;
+    sum(h, part, next);
+    h = next;
   }
-  h = acc;
 }
 
 void negate(Expansion& e) {
@@ -206,9 +250,18 @@ int orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
 }
 
 bool collinear(const Vec3& a, const Vec3& b, const Vec3& c) {
-  return orient2d(a.x(), a.y(), b.x(), b.y(), c.x(), c.y()) == 0 &&
-         orient2d(a.y(), a.z(), b.y(), b.z(), c.y(), c.z()) == 0 &&
-         orient2d(a.z(), a.x(), b.z(), b.x(), c.z(), c.x()) == 0;
+  // Test the projection with the largest area first: for a proper triangle it settles the answer
+  // in the floating-point filter, and the exact path runs only for (nearly) degenerate ones.
+  const Vec3 n = (b - a).cross(c - a).cwiseAbs();
+  int first = 0;
+  if (n.y() > n[first]) first = 1;
+  if (n.z() > n[first]) first = 2;
+  for (int k = 0; k < 3; ++k) {
+    const int axis = (first + k) % 3;  // projection dropping this axis
+    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    if (orient2d(a[u], a[v], b[u], b[v], c[u], c[v]) != 0) return false;
+  }
+  return true;
 }
 
 long long exact_fallback_count() { return g_fallbacks; }

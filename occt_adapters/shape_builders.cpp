@@ -4,6 +4,7 @@
 #include "occt_adapters/shape_impl.h"
 
 #include <BRepBuilderAPI_MakeFace.hxx>
+#include <BRepBuilderAPI_MakePolygon.hxx>
 #include <BRepBuilderAPI_Transform.hxx>
 #include <gp_Ax3.hxx>
 #include <gp_Pln.hxx>
@@ -62,6 +63,26 @@ Result<Shape> make_rectangle(const Vec3& corner, const Vec3& edge_u, const Vec3&
     s = BRepBuilderAPI_MakeFace(plane, 0.0, edge_u.norm(), 0.0, edge_v.norm()).Shape();
   });
   if (!ran.ok()) return ran.error();
+  return wrap(s);
+}
+
+Result<Shape> make_prism_yz(const std::vector<Eigen::Vector2d>& profile_yz, double x_min, double x_max) {
+  if (profile_yz.size() < 3) return invalid_argument("profile_yz", "needs at least three points");
+  if (!(x_max > x_min)) return invalid_argument("x_range", "max must exceed min");
+  TopoDS_Shape s;
+  bool done = false;
+  auto ran = guarded("profile_yz", "making a prism", [&] {
+    BRepBuilderAPI_MakePolygon polygon;
+    for (const auto& p : profile_yz) polygon.Add(gp_Pnt(x_min, p.x(), p.y()));
+    polygon.Close();
+    BRepBuilderAPI_MakeFace face(polygon.Wire(), true);
+    if (!face.IsDone()) return;
+    BRepPrimAPI_MakePrism prism(face.Face(), gp_Vec(x_max - x_min, 0.0, 0.0), true, true);
+    done = prism.IsDone();
+    if (done) s = prism.Shape();
+  });
+  if (!ran.ok()) return ran.error();
+  if (!done) return invalid_argument("profile_yz", "OCCT could not build the prism");
   return wrap(s);
 }
 

@@ -14,6 +14,8 @@ namespace gk::occt {
 Result<Shape> make_box(const Vec3& min, const Vec3& max);
 // A flat rectangular face: corner, then its two edges (perpendicular, non-zero).
 Result<Shape> make_rectangle(const Vec3& corner, const Vec3& edge_u, const Vec3& edge_v);
+// A prism over a convex polygon in the YZ plane, from x_min to x_max.
+Result<Shape> make_prism_yz(const std::vector<Eigen::Vector2d>& profile_yz, double x_min, double x_max);
 Result<Shape> place(const Shape& shape, const RigidTransform& pose);
 Result<Shape> make_compound(const std::vector<Shape>& shapes);
 

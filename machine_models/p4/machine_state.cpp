@@ -1,0 +1,54 @@
+#include "machine_models/p4/machine_state.h"
+
+#include "machine_models/p4/machine_model.h"
+
+#include <cmath>
+#include <cstring>
+
+namespace gk::p4 {
+
+std::uint64_t MachineState::hash() const {
+  // FNV-1a over the fields' bytes: stable within a process, enough for a memo key.
+  std::uint64_t h = 1469598103934665603ull;
+  auto mix = [&h](const void* data, std::size_t n) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;
+  };
+  for (bool e : engaged_segments) {
+    const unsigned char b = e ? 1 : 0;
+    mix(&b, 1);
+  }
+  for (double d : {clamp_z_mm, manipulator_x_mm, manipulator_y_mm, manipulator_rotation_deg, lower_blade_z_offset_mm})
+    mix(&d, sizeof d);
+  return h;
+}
+
+MachineState MachineState::with_aba_span(const MachineModel& model, double x_min, double x_max, double clamp_z_mm) {
+  MachineState s;
+  s.clamp_z_mm = clamp_z_mm;
+  s.engaged_segments.resize(model.aba.segment_widths_mm.size());
+  for (std::size_t i = 0; i < s.engaged_segments.size(); ++i)
+    s.engaged_segments[i] = model.slot_x_min(i) >= x_min - 1e-9 && model.slot_x_max(i) <= x_max + 1e-9;
+  return s;
+}
+
+Result<bool> validate_state(const MachineModel& model, const MachineState& state) {
+  if (!state.engaged_segments.empty() && state.engaged_segments.size() != model.aba.segment_widths_mm.size())
+    return invalid_argument("engaged_segments", "expected " + std::to_string(model.aba.segment_widths_mm.size()) +
+                                                    " entries (one per ABA slot), got " +
+                                                    std::to_string(state.engaged_segments.size()));
+  if (!std::isfinite(state.clamp_z_mm) || state.clamp_z_mm < 0.0 || state.clamp_z_mm > 1000.0)
+    return invalid_argument("clamp_z_mm", "must be within [0, 1000] mm");
+  if (!std::isfinite(state.manipulator_x_mm) || state.manipulator_x_mm < model.manipulator.travel_x_mm[0] ||
+      state.manipulator_x_mm > model.manipulator.travel_x_mm[1])
+    return invalid_argument("manipulator_x_mm", "outside the manipulator's travel");
+  if (!std::isfinite(state.manipulator_y_mm) || state.manipulator_y_mm < model.manipulator.travel_y_mm[0] ||
+      state.manipulator_y_mm > model.manipulator.travel_y_mm[1])
+    return invalid_argument("manipulator_y_mm", "outside the manipulator's travel");
+  if (!std::isfinite(state.manipulator_rotation_deg)) return invalid_argument("manipulator_rotation_deg", "not finite");
+  if (!std::isfinite(state.lower_blade_z_offset_mm) || std::fabs(state.lower_blade_z_offset_mm) > 500.0)
+    return invalid_argument("lower_blade_z_offset_mm", "must be within [-500, 500] mm");
+  return true;
+}
+
+}  // namespace gk::p4

@@ -1,0 +1,245 @@
+#include "machine_models/p4/motion_sweep.h"
+
+#include "kernel/convex_hull.h"
+#include "kernel/mesh_distance.h"
+#include "machine_models/p4/organ_geometry.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace gk::p4 {
+
+RigidTransform Motion::at(double s) const {
+  if (!rotation) return RigidTransform::from_translation(s * travel);
+  return RigidTransform::from_translation(axis_point) * RigidTransform::from_axis_angle(axis_direction, s * angle_rad) *
+         RigidTransform::from_translation(-axis_point);
+}
+
+double Motion::rate(const std::vector<Vec3>& points) const {
+  if (!rotation) return travel.norm();
+  double r = 0.0;
+  for (const Vec3& p : points) {
+    const Vec3 rel = p - axis_point;
+    r = std::max(r, (rel - rel.dot(axis_direction) * axis_direction).norm());
+  }
+  return r * std::fabs(angle_rad);
+}
+
+namespace {
+
+int sample_count(const Motion& motion, double max_step) {
+  if (!motion.rotation) return 1;
+  return std::max(1, static_cast<int>(std::ceil(std::fabs(motion.angle_rad) / max_step)));
+}
+
+// Largest distance of any body point from the rotation axis.
+double reach(const std::vector<MovingBody>& bodies, const Motion& motion) {
+  if (!motion.rotation) return 0.0;
+  double r = 0.0;
+  for (const MovingBody& b : bodies) {
+    const Motion unit{true, motion.axis_point, motion.axis_direction, 1.0, Vec3::Zero()};
+    r = std::max(r, unit.rate(b.points));
+  }
+  return r;
+}
+
+std::vector<Vec3> sampled_points(const std::vector<MovingBody>& bodies, const Motion& motion, int samples) {
+  std::vector<Vec3> pts;
+  for (int k = 0; k <= samples; ++k) {
+    const RigidTransform t = motion.at(static_cast<double>(k) / samples);
+    for (const MovingBody& b : bodies)
+      for (const Vec3& p : b.points) pts.push_back(t.apply(p));
+  }
+  return pts;
+}
+
+double sagitta(const std::vector<MovingBody>& bodies, const Motion& motion, int samples) {
+  if (!motion.rotation) return 0.0;
+  const double step = std::fabs(motion.angle_rad) / samples;
+  return reach(bodies, motion) * (1.0 - std::cos(0.5 * step));
+}
+
+}  // namespace
+
+Aabb swept_bounds(const std::vector<MovingBody>& bodies, const Motion& motion, double max_sample_step_rad) {
+  const int samples = sample_count(motion, max_sample_step_rad);
+  Aabb box;
+  for (const Vec3& p : sampled_points(bodies, motion, samples)) box.extend(p);
+  return box.expanded(sagitta(bodies, motion, samples));
+}
+
+namespace {
+
+// Is the convex organ farther than `bound` from the convex hull? Separating-axis test over both
+// shapes' face normals: a gap along any unit axis is a lower bound of their distance, so a gap
+// beyond the bound proves them apart (and rules out either lying inside the other). Edge-edge axes
+// are not tried: an organ they alone would separate goes on to the narrow phase.
+bool hull_clears(const TriangleMesh& hull, const SweepOrgan& organ, double bound) {
+  const TriangleMesh& om = organ.mesh->mesh();
+  std::vector<Vec3> organ_points;
+  organ_points.reserve(om.vertices().size());
+  for (const Vec3& v : om.vertices()) organ_points.push_back(organ.pose.apply(v));
+  auto separated_along = [&](const Vec3& axis) {
+    double hull_lo = std::numeric_limits<double>::infinity(), hull_hi = -hull_lo;
+    for (const Vec3& v : hull.vertices()) {
+      const double p = axis.dot(v);
+      hull_lo = std::min(hull_lo, p);
+      hull_hi = std::max(hull_hi, p);
+    }
+    double organ_lo = std::numeric_limits<double>::infinity(), organ_hi = -organ_lo;
+    for (const Vec3& v : organ_points) {
+      const double p = axis.dot(v);
+      organ_lo = std::min(organ_lo, p);
+      organ_hi = std::max(organ_hi, p);
+    }
+    return organ_lo - hull_hi > bound || hull_lo - organ_hi > bound;
+  };
+  for (std::size_t t = 0; t < om.triangle_count(); ++t) {
+    const Triangle tri = om.triangle(t);
+    const Vec3 n = organ.pose.apply_direction((tri[1] - tri[0]).cross(tri[2] - tri[0]));
+    if (n.norm() > 0.0 && separated_along(n.normalized())) return true;
+  }
+  for (std::size_t t = 0; t < hull.triangle_count(); ++t) {
+    const Triangle tri = hull.triangle(t);
+    const Vec3 n = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+    if (n.norm() > 0.0 && separated_along(n.normalized())) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+Result<HullLodResult> hull_lod(const std::vector<MovingBody>& bodies, const Motion& motion,
+                               const std::vector<SweepOrgan>& organs, double clearance_mm, double max_sample_step_rad) {
+  HullLodResult out;
+  out.samples = sample_count(motion, max_sample_step_rad);
+  out.sagitta_mm = sagitta(bodies, motion, out.samples);
+  std::vector<char> cleared(organs.size(), 1);
+  // One hull per body: the union of each body's sampled positions, inflated by the sagitta.
+  for (const MovingBody& body : bodies) {
+    const std::vector<MovingBody> one = {body};
+    const std::vector<Vec3> pts = sampled_points(one, motion, out.samples);
+    for (const Vec3& p : pts) out.swept_box.extend(p);
+    auto hull = convex_hull(pts);
+    if (!hull.ok()) {  // a flat sweep has no hull: this body clears nothing here
+      std::fill(cleared.begin(), cleared.end(), 0);
+      continue;
+    }
+    for (std::size_t i = 0; i < organs.size(); ++i)
+      if (cleared[i]) cleared[i] = hull_clears(hull.value(), organs[i], out.sagitta_mm + clearance_mm) ? 1 : 0;
+  }
+  out.swept_box = out.swept_box.expanded(out.sagitta_mm);
+  for (std::size_t i = 0; i < organs.size(); ++i)
+    if (!cleared[i]) out.remaining.push_back(static_cast<int>(i));
+  return out;
+}
+
+namespace {
+
+// Advancement against one organ: the parameter of the first contact (or 1 when none), with the
+// smallest sampled clearance. A query only needs to look as far as the body can still move, so
+// an organ farther than that is cleared for the rest of the motion in one query.
+struct OrganAdvance {
+  bool collided = false;
+  bool budget_exceeded = false;
+  double contact_s = 1.0;
+  Vec3 on_body = Vec3::Zero(), on_organ = Vec3::Zero(), normal = Vec3::Zero();
+  double min_clearance = std::numeric_limits<double>::infinity();
+  double certified = std::numeric_limits<double>::infinity();
+  double min_s = 0.0;
+  Vec3 min_point = Vec3::Zero();
+  int steps = 0;
+};
+
+Result<OrganAdvance> advance_one(const std::vector<MovingBody>& bodies, const Motion& motion, double rate,
+                                 const SweepOrgan& organ, const AdvanceOptions& options, double stop_at_s) {
+  OrganAdvance out;
+  double s = 0.0;
+  Vec3 last_body = Vec3::Zero(), last_organ = Vec3::Zero();
+  bool have_last = false;
+  const double contact = options.required_clearance_mm + options.contact_resolution_mm;
+  for (out.steps = 0; out.steps < options.max_steps; ++out.steps) {
+    const RigidTransform pose = motion.at(s);
+    // Nothing farther than the rest of the motion can reach matters (plus the contact band).
+    const double horizon = rate * (1.0 - s) + contact;
+    double d = std::numeric_limits<double>::infinity();
+    Vec3 on_body = Vec3::Zero(), on_organ = Vec3::Zero();
+    for (const MovingBody& b : bodies) {
+      DistanceRequest req;
+      req.upper_bound_mm = std::min(d, horizon);
+      auto r = distance(*b.mesh, pose, *organ.mesh, organ.pose, req);
+      if (!r.ok()) return r.error();
+      if (r.value().found && r.value().distance_mm < d) {
+        d = r.value().distance_mm;
+        on_body = r.value().point_a;
+        on_organ = r.value().point_b;
+      }
+    }
+    if (!std::isfinite(d)) {  // beyond the horizon: clear for the rest of the motion
+      out.certified = std::min(out.certified, horizon - rate * (1.0 - s));
+      return out;
+    }
+    if (d < out.min_clearance) {
+      out.min_clearance = d;
+      out.min_s = s;
+      out.min_point = on_body;
+    }
+    if (d <= contact) {
+      out.collided = true;
+      out.contact_s = s;
+      out.on_body = on_body;
+      out.on_organ = on_organ;
+      const Vec3 dir = have_last ? Vec3(last_body - last_organ) : Vec3(on_body - on_organ);
+      out.normal = dir.norm() > 0.0 ? dir.normalized() : Vec3::Zero();
+      return out;
+    }
+    have_last = true;
+    last_body = on_body;
+    last_organ = on_organ;
+    // Between this sample and the next no point moves more than step_fraction * (d - required),
+    // so the clearance stays above (1 - step_fraction) * d + step_fraction * required.
+    out.certified = std::min(out.certified, (1.0 - options.step_fraction) * d + options.step_fraction * options.required_clearance_mm);
+    if (s >= 1.0 || s > stop_at_s) return out;  // past an earlier contact elsewhere: no need to go on
+    const double advance = rate > 0.0 ? options.step_fraction * (d - options.required_clearance_mm) / rate : 1.0;
+    s = std::min(1.0, s + advance);
+  }
+  out.budget_exceeded = true;
+  return out;
+}
+
+}  // namespace
+
+Result<SweepOutcome> conservative_advance(const std::vector<MovingBody>& bodies, const Motion& motion,
+                                          const std::vector<SweepOrgan>& organs, const AdvanceOptions& options) {
+  SweepOutcome out;
+  std::vector<Vec3> all_points;
+  for (const MovingBody& b : bodies) all_points.insert(all_points.end(), b.points.begin(), b.points.end());
+  const double rate = motion.rate(all_points);
+  // Each organ advances on its own: a far organ is settled in one query, a near one takes the
+  // small steps it needs. The first contact over all organs is the answer.
+  for (std::size_t i = 0; i < organs.size(); ++i) {
+    auto one = advance_one(bodies, motion, rate, organs[i], options, out.collided ? out.contact_s : 1.0);
+    if (!one.ok()) return one.error();
+    const OrganAdvance& a = one.value();
+    out.steps += a.steps;
+    if (a.budget_exceeded) out.budget_exceeded = true;
+    if (a.collided && (!out.collided || a.contact_s < out.contact_s)) {
+      out.collided = true;
+      out.contact_s = a.contact_s;
+      out.organ = static_cast<int>(i);
+      out.point_on_body = a.on_body;
+      out.point_on_organ = a.on_organ;
+      out.normal = a.normal;
+    }
+    if (a.min_clearance < out.min_clearance_mm) {
+      out.min_clearance_mm = a.min_clearance;
+      out.min_clearance_organ = static_cast<int>(i);
+      out.min_clearance_point = a.min_point;
+      out.min_clearance_s = a.min_s;
+    }
+    out.certified_clearance_mm = std::min(out.certified_clearance_mm, a.certified);
+  }
+  return out;
+}
+
+}  // namespace gk::p4

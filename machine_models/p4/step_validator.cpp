@@ -1,0 +1,383 @@
+#include "machine_models/p4/step_validator.h"
+
+#include "kernel/mesh_bvh.h"
+#include "machine_models/p4/organ_geometry.h"
+#include "occt_adapters/exact_measures.h"
+#include "occt_adapters/shape_builders.h"
+
+#include <chrono>
+#include <cmath>
+
+namespace gk::p4 {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+using Clock = std::chrono::steady_clock;
+
+double us_since(Clock::time_point t0) { return std::chrono::duration<double, std::micro>(Clock::now() - t0).count(); }
+
+std::uint64_t mix(std::uint64_t h, std::uint64_t v) {
+  h ^= v + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
+  return h;
+}
+
+bool is_bend(StepKind k) { return k == StepKind::kBendUp || k == StepKind::kBendDown; }
+
+// The B-Rep distance between the plates (moved by `motion_pose`) and the organ's prism.
+Result<double> exact_clearance(const std::vector<Plate>& plates, const RigidTransform& motion_pose, const Organ& organ,
+                               const RigidTransform& organ_pose) {
+  auto prism = occt::make_prism_yz(organ.profile_yz, organ.x_min, organ.x_max);
+  if (!prism.ok()) return prism.error();
+  auto placed_organ = occt::place(prism.value(), organ_pose);
+  if (!placed_organ.ok()) return placed_organ.error();
+  std::vector<occt::Shape> boxes;
+  for (const Plate& p : plates) {
+    // A plate is a box with perpendicular edges; make it right-handed by walking an edge backwards.
+    Plate q = p;
+    if (q.edge[0].cross(q.edge[1]).dot(q.edge[2]) < 0.0) {
+      q.origin += q.edge[2];
+      q.edge[2] = -q.edge[2];
+    }
+    RigidTransform pose;
+    for (int k = 0; k < 3; ++k) pose.rotation.col(k) = q.edge[k].normalized();
+    pose.translation = q.origin;
+    auto box = occt::make_box(Vec3::Zero(), Vec3(q.edge[0].norm(), q.edge[1].norm(), q.edge[2].norm()));
+    if (!box.ok()) return box.error();
+    auto placed = occt::place(box.value(), motion_pose * pose);
+    if (!placed.ok()) return placed.error();
+    boxes.push_back(placed.value());
+  }
+  auto compound = occt::make_compound(boxes);
+  if (!compound.ok()) return compound.error();
+  auto d = occt::exact_distance(compound.value(), placed_organ.value());
+  if (!d.ok()) return d.error();
+  return d.value().distance_mm;
+}
+
+}  // namespace
+
+const char* to_string(Stage stage) {
+  switch (stage) {
+    case Stage::kCache: return "cache";
+    case Stage::kGlobalBox: return "global_box";
+    case Stage::kBroadPhase: return "broad_phase";
+    case Stage::kHullLod: return "hull_lod";
+    case Stage::kNarrow: return "narrow";
+    case Stage::kExact: return "exact";
+  }
+  return "?";
+}
+
+const char* to_string(CorrectionKind kind) {
+  switch (kind) {
+    case CorrectionKind::kNone: return "NONE";
+    case CorrectionKind::kRepoShift: return "REPO";
+    case CorrectionKind::kChangeAba: return "CHANGE_ABA";
+    case CorrectionKind::kRetract: return "RETRACT";
+    case CorrectionKind::kFlip: return "FLIP";
+  }
+  return "?";
+}
+
+// What a step needs before any organ is looked at: the moving bodies in machine coordinates, the
+// motion, and which organs take part. Cached per part, step and (for manipulator moves) state.
+struct StepValidator::Prepared {
+  std::vector<MovingBody> bodies;
+  std::vector<Plate> plates;  // the bodies' plates, machine coordinates (for the exact phase)
+  Motion motion;
+  bool is_static = false;     // CLAMP: no motion
+  double lift_mm = 0.0;       // clamp-relative organs raised by this during the step
+};
+
+StepValidator::StepValidator(std::shared_ptr<MachineScene> scene, ValidatorOptions options)
+    : scene_(std::move(scene)), options_(options) {}
+
+Result<bool> StepValidator::set_state(const MachineState& state) { return scene_->apply_state(state); }
+
+void StepValidator::clear_caches() {
+  memo_.clear();
+  prepared_.clear();
+}
+
+Result<std::shared_ptr<const StepValidator::Prepared>> StepValidator::prepare(const SheetPart& part, const BendStep& step) {
+  const MachineModel& model = scene_->model();
+  const MachineState& state = scene_->state();
+  std::uint64_t key = mix(part.content_hash(), step.hash());
+  if (!is_bend(step.kind)) key = mix(key, state.hash());
+  if (auto it = prepared_.find(key); it != prepared_.end()) return it->second;
+
+  auto prepared = std::make_shared<Prepared>();
+  const RigidTransform placement = part_placement(part, step);
+  const double t = part.thickness_mm();
+  std::vector<Plate> plates;
+  if (is_bend(step.kind)) {
+    std::vector<Plate> moving, fixed;
+    auto split = part.split(step.bend_point_mm, step.bend_direction, model.bend_zone_mm, moving, fixed);
+    if (!split.ok()) return split.error();
+    if (moving.empty()) return invalid_argument("bend_line", "nothing of the part lies on the moving side beyond the bend zone");
+    if (fixed.empty()) return invalid_argument("bend_line", "nothing of the part is left under the blankholder");
+    plates = moving;
+  } else {
+    plates = part.plates();
+  }
+  for (Plate& p : plates) p = p.transformed(placement);
+  std::vector<std::vector<Plate>> groups = {plates};
+  if (step.kind == StepKind::kRotate || step.kind == StepKind::kApproach || step.kind == StepKind::kRetract) {
+    // The manipulator's rotator column rides with the part: a body of its own, so that each gets
+    // a tight hull (the column turns about its own axis and sweeps little).
+    const double r = model.manipulator.rotator_radius_mm;
+    const Vec3 c(state.manipulator_x_mm, state.manipulator_y_mm, t);
+    groups.push_back({{c + Vec3(-r, -r, 0.0), {Vec3(2 * r, 0, 0), Vec3(0, 2 * r, 0), Vec3(0, 0, model.manipulator.rotator_height_mm)},
+                       "manipulator.rotator"}});
+  }
+  for (auto& group : groups) {
+    if (step.kind == StepKind::kRotate && step.retract_mm > 0.0)
+      for (Plate& p : group) p = p.transformed(RigidTransform::from_translation(Vec3(0, -step.retract_mm, 0)));
+    MovingBody body;
+    TriangleMesh mesh = plates_mesh(group);
+    body.points = mesh.vertices();
+    auto bvh = MeshBvh::build(std::make_shared<const TriangleMesh>(std::move(mesh)));
+    if (!bvh.ok()) return bvh.error();
+    body.mesh = bvh.value();
+    prepared->bodies.push_back(std::move(body));
+    prepared->plates.insert(prepared->plates.end(), group.begin(), group.end());
+  }
+
+  switch (step.kind) {
+    case StepKind::kBendUp:
+      prepared->motion = {true, Vec3(0, 0, t), Vec3::UnitX(), step.target_angle_deg * kPi / 180.0, Vec3::Zero()};
+      break;
+    case StepKind::kBendDown:
+      prepared->motion = {true, Vec3::Zero(), Vec3::UnitX(), -step.target_angle_deg * kPi / 180.0, Vec3::Zero()};
+      break;
+    case StepKind::kRotate:
+      prepared->motion = {true, Vec3(state.manipulator_x_mm, state.manipulator_y_mm - step.retract_mm, 0.0), Vec3::UnitZ(),
+                          step.rotate_angle_deg * kPi / 180.0, Vec3::Zero()};
+      prepared->lift_mm = model.aba_lift_for_rotation_mm;
+      break;
+    case StepKind::kApproach:
+    case StepKind::kRetract:
+      prepared->motion = {false, Vec3::Zero(), Vec3::UnitX(), 0.0, step.travel_mm};
+      prepared->lift_mm = model.aba_lift_for_rotation_mm;
+      break;
+    case StepKind::kClamp:
+      prepared->is_static = true;
+      prepared->motion = {false, Vec3::Zero(), Vec3::UnitX(), 0.0, Vec3::Zero()};
+      break;
+  }
+  if (prepared_.size() >= options_.memo_capacity) prepared_.clear();
+  prepared_[key] = prepared;
+  return std::shared_ptr<const Prepared>(prepared);
+}
+
+Result<StepAnswer> StepValidator::validate(const SheetPart& part, const BendStep& step) {
+  const auto t0 = Clock::now();
+  auto valid = validate_step(scene_->model(), step);
+  if (!valid.ok()) return valid.error();
+  const MachineModel& model = scene_->model();
+  if (part.thickness_mm() < model.min_thickness_mm || part.thickness_mm() > model.max_thickness_mm)
+    return invalid_argument("part.thickness_mm", "outside the machine's range [" + std::to_string(model.min_thickness_mm) +
+                                                     ", " + std::to_string(model.max_thickness_mm) + "] mm");
+  const std::uint64_t key = mix(mix(part.content_hash(), step.hash()), scene_->state().hash());
+  if (auto it = memo_.find(key); it != memo_.end()) {
+    StepAnswer hit = it->second;
+    hit.decided_by = Stage::kCache;
+    hit.times = StageTimes{};
+    hit.times.cache_us = hit.times.total_us = us_since(t0);
+    return hit;
+  }
+  auto answer = run_pipeline(part, step);
+  if (!answer.ok()) return answer;
+  StepAnswer& a = answer.value();
+  if (a.verdict == Verdict::kCollision && options_.compute_corrections) add_correction(part, step, a);
+  a.times.cache_us = 0.0;
+  a.times.total_us = us_since(t0);
+  if (memo_.size() >= options_.memo_capacity) memo_.clear();
+  memo_[key] = a;
+  return answer;
+}
+
+Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const BendStep& step) {
+  StepAnswer answer;
+  auto t = Clock::now();
+  auto prepared_or = prepare(part, step);
+  if (!prepared_or.ok()) return prepared_or.error();
+  const Prepared& prep = *prepared_or.value();
+  const std::vector<Organ>& organs = scene_->organs();
+  const bool bend = is_bend(step.kind);
+  const double step_rad = options_.hull_sample_step_deg * kPi / 180.0;
+
+  // The organs that take part, placed for the step: supports carry the part (intended contact);
+  // the blades form the flange being bent; clamp-relative organs rise while the part moves.
+  auto takes_part = [&](const Organ& o) { return !o.support && !(bend && o.name.rfind("blade.", 0) == 0); };
+  auto organ_pose = [&](const Organ& o) {
+    return o.relative_to_clamp && prep.lift_mm != 0.0 ? RigidTransform::from_translation(Vec3(0, 0, prep.lift_mm)) * o.pose
+                                                      : o.pose;
+  };
+
+  // 2. Global box: the whole motion against the whole machine.
+  Aabb swept;
+  if (prep.is_static) {
+    for (const MovingBody& b : prep.bodies) swept.extend(b.mesh->root_bounds());
+  } else {
+    swept = swept_bounds(prep.bodies, prep.motion, step_rad);
+  }
+  swept = swept.expanded(options_.required_clearance_mm);
+  Aabb machine;
+  for (const Organ& o : organs)
+    if (takes_part(o)) machine.extend(o.box);
+  machine.max.z() += prep.lift_mm;
+  answer.times.global_box_us = us_since(t);
+  if (!swept.overlaps(machine)) {
+    answer.verdict = Verdict::kClear;
+    answer.decided_by = Stage::kGlobalBox;
+    answer.reason = "the motion's box misses the machine's box";
+    return answer;
+  }
+
+  // 3. Broad phase over the organ tree (boxes lowered by the lift, so raised organs are found).
+  t = Clock::now();
+  Aabb query = swept;
+  query.min.z() -= prep.lift_mm;
+  std::vector<SweepOrgan> candidates;
+  for (int i : scene_->organs_overlapping(query)) {
+    if (!takes_part(organs[i])) continue;
+    candidates.push_back({i, organs[i].mesh.get(), organ_pose(organs[i])});
+  }
+  answer.candidate_organs = static_cast<int>(candidates.size());
+  answer.times.broad_us = us_since(t);
+  if (candidates.empty()) {
+    answer.verdict = Verdict::kClear;
+    answer.decided_by = Stage::kBroadPhase;
+    answer.reason = "no organ's box meets the motion's box";
+    return answer;
+  }
+
+  // CLAMP: a static check; the blankholder pressing on the sheet is a touch, not a collision.
+  if (prep.is_static) {
+    t = Clock::now();
+    answer.decided_by = Stage::kNarrow;
+    answer.verdict = Verdict::kClear;
+    for (const SweepOrgan& c : candidates) {
+      for (const MovingBody& b : prep.bodies) {
+        auto v = assess(*b.mesh, RigidTransform{}, *c.mesh, c.pose);
+        if (!v.ok()) return v.error();
+        const VerdictResult& r = v.value();
+        if (r.verdict == Verdict::kCollision || r.verdict == Verdict::kInconclusive) {
+          StepCollision col;
+          col.organ = organs[c.index].name;
+          col.point_mm = r.point_a;
+          col.organ_point_mm = r.point_b;
+          double depth = 0.0;
+          const RigidTransform to_organ = c.pose.inverse();
+          for (const Vec3& p : b.points)
+            depth = std::max(depth, depth_inside_prism(organs[c.index].profile_yz, organs[c.index].x_min, organs[c.index].x_max,
+                                                       to_organ.apply(p)));
+          col.depth_mm = depth;
+          col.first_contact_fraction = 0.0;
+          answer.collisions.push_back(col);
+          answer.verdict = Verdict::kCollision;
+        } else if (r.distance_mm < answer.min_clearance_mm && r.verdict == Verdict::kClear) {
+          answer.min_clearance_mm = r.distance_mm;
+          answer.clearance_organ = organs[c.index].name;
+          answer.clearance_point_mm = r.point_a;
+        }
+      }
+    }
+    answer.reason = answer.verdict == Verdict::kClear ? "the blankholder closes on the sheet without hitting it"
+                                                      : "the blankholder would close on part of the sheet";
+    answer.times.narrow_us = us_since(t);
+    return answer;
+  }
+
+  // 4. Hull level of detail.
+  t = Clock::now();
+  auto lod = hull_lod(prep.bodies, prep.motion, candidates, options_.required_clearance_mm, step_rad);
+  if (!lod.ok()) return lod.error();
+  std::vector<SweepOrgan> narrow;
+  for (int i : lod.value().remaining) narrow.push_back(candidates[i]);
+  answer.times.hull_us = us_since(t);
+  if (narrow.empty()) {
+    answer.verdict = Verdict::kClear;
+    answer.decided_by = Stage::kHullLod;
+    answer.reason = "the swept hull (inflated by the sagitta) clears every candidate organ";
+    return answer;
+  }
+
+  // 5. Narrow phase.
+  t = Clock::now();
+  AdvanceOptions adv;
+  adv.required_clearance_mm = options_.required_clearance_mm;
+  auto swept_or = conservative_advance(prep.bodies, prep.motion, narrow, adv);
+  if (!swept_or.ok()) return swept_or.error();
+  const SweepOutcome& out = swept_or.value();
+  answer.narrow_steps = out.steps;
+  answer.times.narrow_us = us_since(t);
+  answer.decided_by = Stage::kNarrow;
+  const double full_deg = prep.motion.rotation ? prep.motion.angle_rad * 180.0 / kPi : 0.0;
+  if (out.budget_exceeded) {
+    answer.verdict = Verdict::kInconclusive;
+    answer.reason = "the motion grazes an organ for too long to certify (advancement budget exhausted)";
+    return answer;
+  }
+  if (out.collided) {
+    const SweepOrgan& hit = narrow[out.organ];
+    const Organ& organ = organs[hit.index];
+    StepCollision col;
+    col.organ = organ.name;
+    col.point_mm = out.point_on_body;
+    col.organ_point_mm = out.point_on_organ;
+    col.normal = out.normal;
+    col.first_contact_fraction = out.contact_s;
+    col.first_contact_deg = std::fabs(full_deg) * out.contact_s;
+    // Depth at the end of the step: the deepest moving vertex inside the organ.
+    const RigidTransform end = prep.motion.at(1.0);
+    const RigidTransform to_organ = hit.pose.inverse();
+    double depth = 0.0;
+    for (const MovingBody& b : prep.bodies)
+      for (const Vec3& p : b.points)
+        depth = std::max(depth, depth_inside_prism(organ.profile_yz, organ.x_min, organ.x_max, to_organ.apply(end.apply(p))));
+    col.depth_mm = depth;
+    answer.collisions.push_back(col);
+    answer.verdict = Verdict::kCollision;
+    answer.reason = out.contact_s == 0.0 ? "already within the required clearance of " + organ.name + " at the start"
+                                         : "reaches " + organ.name + " during the motion";
+    return answer;
+  }
+  answer.verdict = Verdict::kClear;
+  answer.min_clearance_mm = out.min_clearance_mm;
+  answer.certified_clearance_mm = out.certified_clearance_mm;
+  answer.clearance_point_mm = out.min_clearance_point;
+  if (out.min_clearance_organ >= 0) answer.clearance_organ = organs[narrow[out.min_clearance_organ].index].name;
+  answer.reason = "the exact sweep keeps its clearance from every organ";
+
+  // 6. Exact phase, only inside the tolerance window. The advancement already proves the clearance
+  // never falls below the required one between samples on these meshes; a near miss is measured
+  // again on the B-Rep (the moving plates and the organ's prism) at the closest sampled pose, so a
+  // tessellation can never turn a real collision into a clear answer.
+  if (out.min_clearance_mm < options_.required_clearance_mm + options_.exact_window_mm) {
+    t = Clock::now();
+    answer.decided_by = Stage::kExact;
+    const SweepOrgan& near = narrow[out.min_clearance_organ];
+    auto exact = exact_clearance(prep.plates, prep.motion.at(out.min_clearance_s), organs[near.index], near.pose);
+    if (!exact.ok()) {
+      answer.verdict = Verdict::kInconclusive;
+      answer.reason = "near miss that the B-Rep confirmation could not measure: " + exact.error().to_string();
+    } else if (exact.value() <= options_.required_clearance_mm) {
+      answer.verdict = Verdict::kCollision;
+      answer.reason = "the B-Rep comes closer to " + organs[near.index].name + " than the required clearance";
+      StepCollision col;
+      col.organ = organs[near.index].name;
+      col.point_mm = out.min_clearance_point;
+      col.first_contact_fraction = out.min_clearance_s;
+      col.first_contact_deg = std::fabs(full_deg) * out.min_clearance_s;
+      answer.collisions.push_back(col);
+    } else {
+      answer.reason = "near miss confirmed on the B-Rep";
+    }
+    answer.times.exact_us = us_since(t);
+  }
+  return answer;
+}
+
+}  // namespace gk::p4
