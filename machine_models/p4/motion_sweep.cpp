@@ -151,8 +151,9 @@ struct OrganAdvance {
   int steps = 0;
 };
 
-Result<OrganAdvance> advance_one(const std::vector<MovingBody>& bodies, const Motion& motion, double rate,
-                                 const SweepOrgan& organ, const AdvanceOptions& options, double stop_at_s) {
+Result<OrganAdvance> advance_one(const MovingBody& body, const Motion& motion, const SweepOrgan& organ,
+                                 const AdvanceOptions& options, double stop_at_s) {
+  const double rate = motion.rate(body.points);
   OrganAdvance out;
   double s = 0.0;
   Vec3 last_body = Vec3::Zero(), last_organ = Vec3::Zero();
@@ -164,16 +165,14 @@ Result<OrganAdvance> advance_one(const std::vector<MovingBody>& bodies, const Mo
     const double horizon = rate * (1.0 - s) + contact;
     double d = std::numeric_limits<double>::infinity();
     Vec3 on_body = Vec3::Zero(), on_organ = Vec3::Zero();
-    for (const MovingBody& b : bodies) {
-      DistanceRequest req;
-      req.upper_bound_mm = std::min(d, horizon);
-      auto r = distance(*b.mesh, pose, *organ.mesh, organ.pose, req);
-      if (!r.ok()) return r.error();
-      if (r.value().found && r.value().distance_mm < d) {
-        d = r.value().distance_mm;
-        on_body = r.value().point_a;
-        on_organ = r.value().point_b;
-      }
+    DistanceRequest req;
+    req.upper_bound_mm = horizon;
+    auto r = distance(*body.mesh, pose, *organ.mesh, organ.pose, req);
+    if (!r.ok()) return r.error();
+    if (r.value().found) {
+      d = r.value().distance_mm;
+      on_body = r.value().point_a;
+      on_organ = r.value().point_b;
     }
     if (!std::isfinite(d)) {  // beyond the horizon: clear for the rest of the motion
       out.certified = std::min(out.certified, horizon - rate * (1.0 - s));
@@ -212,13 +211,11 @@ Result<OrganAdvance> advance_one(const std::vector<MovingBody>& bodies, const Mo
 Result<SweepOutcome> conservative_advance(const std::vector<MovingBody>& bodies, const Motion& motion,
                                           const std::vector<SweepOrgan>& organs, const AdvanceOptions& options) {
   SweepOutcome out;
-  std::vector<Vec3> all_points;
-  for (const MovingBody& b : bodies) all_points.insert(all_points.end(), b.points.begin(), b.points.end());
-  const double rate = motion.rate(all_points);
-  // Each organ advances on its own: a far organ is settled in one query, a near one takes the
-  // small steps it needs. The first contact over all organs is the answer.
-  for (std::size_t i = 0; i < organs.size(); ++i) {
-    auto one = advance_one(bodies, motion, rate, organs[i], options, out.collided ? out.contact_s : 1.0);
+  // Each (body, organ) pair advances on its own, at the body's own speed: a far pair is settled
+  // in one query, a near one takes the small steps it needs. The first contact is the answer.
+  for (std::size_t i = 0; i < organs.size(); ++i)
+  for (const MovingBody& body : bodies) {
+    auto one = advance_one(body, motion, organs[i], options, out.collided ? out.contact_s : 1.0);
     if (!one.ok()) return one.error();
     const OrganAdvance& a = one.value();
     out.steps += a.steps;

@@ -54,6 +54,41 @@ Result<double> exact_clearance(const std::vector<Plate>& plates, const RigidTran
   return d.value().distance_mm;
 }
 
+// The plate cut across its edge that runs most nearly away from the rotation axis, into bands of
+// 4, 8, 16, ... mm from the end nearer the axis. Translations keep the plate whole.
+std::vector<Plate> radial_bands(const Plate& plate, const Motion& motion) {
+  if (!motion.rotation) return {plate};
+  auto radius = [&](const Vec3& x) {
+    const Vec3 rel = x - motion.axis_point;
+    return (rel - rel.dot(motion.axis_direction) * motion.axis_direction).norm();
+  };
+  int k = 0;
+  double best = -1.0;
+  for (int e = 0; e < 3; ++e) {
+    const double change = std::fabs(radius(plate.origin + plate.edge[e]) - radius(plate.origin));
+    if (change > best) {
+      best = change;
+      k = e;
+    }
+  }
+  const double length = plate.edge[k].norm();
+  const bool from_origin = radius(plate.origin) <= radius(plate.origin + plate.edge[k]);
+  std::vector<Plate> bands;
+  double start = 0.0, width = 4.0;
+  while (start < length) {
+    const double end = (length - (start + width) < 0.5 * width) ? length : start + width;
+    Plate band = plate;
+    const double a0 = from_origin ? start / length : 1.0 - end / length;
+    const double a1 = from_origin ? end / length : 1.0 - start / length;
+    band.origin = plate.origin + a0 * plate.edge[k];
+    band.edge[k] = (a1 - a0) * plate.edge[k];
+    bands.push_back(band);
+    start = end;
+    width *= 2.0;
+  }
+  return bands;
+}
+
 }  // namespace
 
 const char* to_string(Stage stage) {
@@ -82,7 +117,8 @@ const char* to_string(CorrectionKind kind) {
 // What a step needs before any organ is looked at: the moving bodies in machine coordinates, the
 // motion, and which organs take part. Cached per part, step and (for manipulator moves) state.
 struct StepValidator::Prepared {
-  std::vector<MovingBody> bodies;
+  std::vector<MovingBody> bodies;  // one per rigid group (part, manipulator): for the hull
+  std::vector<MovingBody> pieces;  // the same plates cut into radial bands: for advancement
   std::vector<Plate> plates;  // the bodies' plates, machine coordinates (for the exact phase)
   Motion motion;
   bool is_static = false;     // CLAMP: no motion
@@ -164,6 +200,19 @@ Result<std::shared_ptr<const StepValidator::Prepared>> StepValidator::prepare(co
       prepared->is_static = true;
       prepared->motion = {false, Vec3::Zero(), Vec3::UnitX(), 0.0, Vec3::Zero()};
       break;
+  }
+  // Advancement steps by the fastest point of a body: cutting the plates into bands of growing
+  // distance from the rotation axis lets the slow band next to a tool take long steps.
+  for (const Plate& plate : prepared->plates) {
+    for (const Plate& band : radial_bands(plate, prepared->motion)) {
+      MovingBody piece;
+      TriangleMesh mesh = plates_mesh({band});
+      piece.points = mesh.vertices();
+      auto bvh = MeshBvh::build(std::make_shared<const TriangleMesh>(std::move(mesh)));
+      if (!bvh.ok()) return bvh.error();
+      piece.mesh = bvh.value();
+      prepared->pieces.push_back(std::move(piece));
+    }
   }
   if (prepared_.size() >= options_.memo_capacity) prepared_.clear();
   prepared_[key] = prepared;
@@ -308,7 +357,7 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
   t = Clock::now();
   AdvanceOptions adv;
   adv.required_clearance_mm = options_.required_clearance_mm;
-  auto swept_or = conservative_advance(prep.bodies, prep.motion, narrow, adv);
+  auto swept_or = conservative_advance(prep.pieces, prep.motion, narrow, adv);
   if (!swept_or.ok()) return swept_or.error();
   const SweepOutcome& out = swept_or.value();
   answer.narrow_steps = out.steps;

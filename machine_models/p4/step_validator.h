@@ -82,7 +82,8 @@ class StepValidator {
   Result<StepAnswer> validate(const SheetPart& part, const BendStep& step);
 
   std::size_t memo_size() const { return memo_.size(); }
-  void clear_caches();
+  void clear_caches();  // answers and prepared geometry
+  void clear_memo() { memo_.clear(); }
 
  private:
   struct Prepared;
