@@ -206,6 +206,17 @@ Result<OrganAdvance> advance_one(const MovingBody& body, const Motion& motion, c
   return out;
 }
 
+// The range of the points' coordinates along the motion's axis.
+std::pair<double, double> axial_extent(const std::vector<Vec3>& points, const Motion& motion) {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const Vec3& p : points) {
+    const double a = motion.axis_direction.dot(p - motion.axis_point);
+    lo = std::min(lo, a);
+    hi = std::max(hi, a);
+  }
+  return {lo, hi};
+}
+
 }  // namespace
 
 Result<SweepOutcome> conservative_advance(const std::vector<MovingBody>& bodies, const Motion& motion,
@@ -213,8 +224,24 @@ Result<SweepOutcome> conservative_advance(const std::vector<MovingBody>& bodies,
   SweepOutcome out;
   // Each (body, organ) pair advances on its own, at the body's own speed: a far pair is settled
   // in one query, a near one takes the small steps it needs. The first contact is the answer.
+  // Along a rotation's axis nothing moves: a body and an organ whose extents along the axis lie
+  // apart by more than the required clearance can never meet, and need no query at all.
+  std::vector<std::pair<double, double>> body_axial(bodies.size());
+  for (std::size_t b = 0; b < bodies.size(); ++b) body_axial[b] = axial_extent(bodies[b].points, motion);
   for (std::size_t i = 0; i < organs.size(); ++i)
-  for (const MovingBody& body : bodies) {
+  for (std::size_t b = 0; b < bodies.size(); ++b) {
+    const MovingBody& body = bodies[b];
+    if (motion.rotation) {
+      const Aabb& lb = organs[i].mesh->root_bounds();
+      std::vector<Vec3> corners;
+      for (int k = 0; k < 8; ++k)
+        corners.push_back(organs[i].pose.apply(Vec3((k & 1) ? lb.max.x() : lb.min.x(), (k & 2) ? lb.max.y() : lb.min.y(),
+                                                    (k & 4) ? lb.max.z() : lb.min.z())));
+      const auto organ_axial = axial_extent(corners, motion);
+      if (organ_axial.first > body_axial[b].second + options.required_clearance_mm + options.contact_resolution_mm ||
+          body_axial[b].first > organ_axial.second + options.required_clearance_mm + options.contact_resolution_mm)
+        continue;
+    }
     auto one = advance_one(body, motion, organs[i], options, out.collided ? out.contact_s : 1.0);
     if (!one.ok()) return one.error();
     const OrganAdvance& a = one.value();

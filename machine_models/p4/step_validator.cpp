@@ -251,6 +251,8 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
   auto t = Clock::now();
   auto prepared_or = prepare(part, step);
   if (!prepared_or.ok()) return prepared_or.error();
+  answer.times.prepare_us = us_since(t);
+  t = Clock::now();
   const Prepared& prep = *prepared_or.value();
   const std::vector<Organ>& organs = scene_->organs();
   const bool bend = is_bend(step.kind);

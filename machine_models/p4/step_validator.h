@@ -44,7 +44,7 @@ struct StepCollision {
 };
 
 struct StageTimes {
-  double cache_us = 0, global_box_us = 0, broad_us = 0, hull_us = 0, narrow_us = 0, exact_us = 0, total_us = 0;
+  double cache_us = 0, prepare_us = 0, global_box_us = 0, broad_us = 0, hull_us = 0, narrow_us = 0, exact_us = 0, total_us = 0;
 };
 
 struct StepAnswer {

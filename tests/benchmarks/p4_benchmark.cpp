@@ -97,6 +97,7 @@ void run(benchmark::State& state, Mode mode) {
       }
       const StageTimes& st = a.value().times;
       sum.cache_us += st.cache_us;
+      sum.prepare_us += st.prepare_us;
       sum.global_box_us += st.global_box_us;
       sum.broad_us += st.broad_us;
       sum.hull_us += st.hull_us;
@@ -112,6 +113,7 @@ void run(benchmark::State& state, Mode mode) {
   state.counters["p50_us"] = totals[totals.size() / 2];
   state.counters["p99_us"] = totals[totals.size() * 99 / 100];
   state.counters["max_us"] = totals.back();
+  state.counters["stage_prepare_us"] = sum.prepare_us / n;
   state.counters["stage_global_us"] = sum.global_box_us / n;
   state.counters["stage_broad_us"] = sum.broad_us / n;
   state.counters["stage_hull_us"] = sum.hull_us / n;
