@@ -5,6 +5,7 @@
 #include "occt_adapters/exact_measures.h"
 #include "occt_adapters/shape_builders.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -87,6 +88,27 @@ std::vector<Plate> radial_bands(const Plate& plate, const Motion& motion) {
     width *= 2.0;
   }
   return bands;
+}
+
+// The lowest Z reached by any body corner while rotating about an axis parallel to X. A box's
+// lowest point over a rotation is at a corner, and each corner's lowest point is on its arc.
+double lowest_point_of_rotation(const std::vector<MovingBody>& bodies, const Motion& motion) {
+  double lowest = std::numeric_limits<double>::infinity();
+  const double a0 = std::min(0.0, motion.angle_rad), a1 = std::max(0.0, motion.angle_rad);
+  for (const MovingBody& b : bodies)
+    for (const Vec3& p : b.points) {
+      const double y = p.y() - motion.axis_point.y(), z = p.z() - motion.axis_point.z();
+      const double r = std::hypot(y, z), phi = std::atan2(z, y);
+      // z(angle) = r sin(phi + angle) over angle in [a0, a1]: its minimum is at an end, or at
+      // phi + angle = -pi/2 (mod 2 pi) when that lies inside.
+      double m = std::min(r * std::sin(phi + a0), r * std::sin(phi + a1));
+      for (double k = -2.0; k <= 2.0; k += 1.0) {
+        const double at = -0.5 * kPi + 2.0 * kPi * k - phi;
+        if (at >= a0 && at <= a1) m = -r;
+      }
+      lowest = std::min(lowest, motion.axis_point.z() + m);
+    }
+  return lowest;
 }
 
 }  // namespace
@@ -294,6 +316,17 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
   for (int i : scene_->organs_overlapping(query)) {
     if (!takes_part(organs[i])) continue;
     candidates.push_back({i, organs[i].mesh.get(), organ_pose(organs[i])});
+  }
+  if (step.kind == StepKind::kBendDown) {
+    // The cheap lowest-point check: a flange turning down about the X axis reaches its exact
+    // lowest point analytically (each corner on its circle); organs wholly below it drop out.
+    const double lowest = lowest_point_of_rotation(prep.bodies, prep.motion);
+    answer.lowest_point_mm = lowest;
+    candidates.erase(std::remove_if(candidates.begin(), candidates.end(),
+                                    [&](const SweepOrgan& c) {
+                                      return organs[c.index].box.max.z() < lowest - options_.required_clearance_mm;
+                                    }),
+                     candidates.end());
   }
   answer.candidate_organs = static_cast<int>(candidates.size());
   answer.times.broad_us = us_since(t);

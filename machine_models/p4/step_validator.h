@@ -58,6 +58,7 @@ struct StepAnswer {
   Vec3 clearance_point_mm = Vec3::Zero();
   Correction correction;
   StageTimes times;
+  double lowest_point_mm = std::numeric_limits<double>::quiet_NaN();  // BEND_DOWN: the sweep's lowest Z
   int candidate_organs = 0;
   int narrow_steps = 0;
 };

@@ -121,6 +121,9 @@ TEST(P4Scenarios, LongFlangeBendingDownHitsTheBedAndFlippingClearsIt) {
   auto short_down = e.validator->validate(part, bend(StepKind::kBendDown, 800.0 - 120.0, 90.0));
   ASSERT_TRUE(short_down.ok());
   EXPECT_EQ(short_down.value().verdict, Verdict::kClear) << short_down.value().reason;
+  // The lowest-point check: the 120 mm flange's lower far edge ends straight below the axis.
+  EXPECT_NEAR(short_down.value().lowest_point_mm, -120.0, 1e-9);
+  EXPECT_NEAR(a.value().lowest_point_mm, -flange, 1e-9);
 }
 
 SheetPart box_part(double t) {
