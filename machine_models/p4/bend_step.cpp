@@ -1,7 +1,8 @@
 #include "machine_models/p4/bend_step.h"
 
+#include "machine_models/p4/content_hash.h"
+
 #include <cmath>
-#include <cstring>
 #include <limits>
 
 namespace gk::p4 {
@@ -19,17 +20,10 @@ const char* to_string(StepKind kind) {
 }
 
 std::uint64_t BendStep::hash() const {
-  std::uint64_t h = 1469598103934665603ull;
-  auto mix = [&h](double d) {
-    unsigned char bytes[sizeof d];
-    std::memcpy(bytes, &d, sizeof d);
-    for (unsigned char b : bytes) h = (h ^ b) * 1099511628211ull;
-  };
-  mix(static_cast<double>(kind));
-  for (double d : {bend_point_mm.x(), bend_point_mm.y(), bend_direction.x(), bend_direction.y(), target_angle_deg,
-                   rotate_angle_deg, travel_mm.x(), travel_mm.y(), travel_mm.z(), lateral_shift_mm, retract_mm})
-    mix(d);
-  return h;
+  return ContentHash()
+      .add({static_cast<double>(kind), bend_point_mm.x(), bend_point_mm.y(), bend_direction.x(), bend_direction.y(),
+            target_angle_deg, rotate_angle_deg, travel_mm.x(), travel_mm.y(), travel_mm.z(), lateral_shift_mm, retract_mm})
+      .value();
 }
 
 Result<bool> validate_step(const MachineModel& model, const BendStep& step) {

@@ -1,26 +1,18 @@
 #include "machine_models/p4/machine_state.h"
 
+#include "machine_models/p4/content_hash.h"
 #include "machine_models/p4/machine_model.h"
 
 #include <cmath>
-#include <cstring>
 
 namespace gk::p4 {
 
 std::uint64_t MachineState::hash() const {
-  // FNV-1a over the fields' bytes: stable within a process, enough for a memo key.
-  std::uint64_t h = 1469598103934665603ull;
-  auto mix = [&h](const void* data, std::size_t n) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;
-  };
-  for (bool e : engaged_segments) {
-    const unsigned char b = e ? 1 : 0;
-    mix(&b, 1);
-  }
-  for (double d : {clamp_z_mm, manipulator_x_mm, manipulator_y_mm, manipulator_rotation_deg, lower_blade_z_offset_mm})
-    mix(&d, sizeof d);
-  return h;
+  ContentHash h;
+  h.add(static_cast<double>(engaged_segments.size()));
+  for (bool e : engaged_segments) h.add(e ? 1.0 : 0.0);
+  h.add({clamp_z_mm, manipulator_x_mm, manipulator_y_mm, manipulator_rotation_deg, lower_blade_z_offset_mm});
+  return h.value();
 }
 
 MachineState MachineState::with_aba_span(const MachineModel& model, double x_min, double x_max, double clamp_z_mm) {

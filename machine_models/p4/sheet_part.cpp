@@ -1,7 +1,8 @@
 #include "machine_models/p4/sheet_part.h"
 
+#include "machine_models/p4/content_hash.h"
+
 #include <cmath>
-#include <cstring>
 
 namespace gk::p4 {
 namespace {
@@ -132,19 +133,13 @@ TriangleMesh SheetPart::mesh(std::vector<int>* plate_of_triangle) const {
 }
 
 std::uint64_t SheetPart::content_hash() const {
-  std::uint64_t h = 1469598103934665603ull;
-  auto mix = [&h](double d) {
-    unsigned char bytes[sizeof d];
-    std::memcpy(bytes, &d, sizeof d);
-    for (unsigned char b : bytes) h = (h ^ b) * 1099511628211ull;
-  };
-  mix(thickness_);
+  ContentHash h;
+  h.add(thickness_);
   for (const Plate& p : plates_) {
-    for (int k = 0; k < 3; ++k) mix(p.origin[k]);
-    for (const Vec3& e : p.edge)
-      for (int k = 0; k < 3; ++k) mix(e[k]);
+    h.add({p.origin.x(), p.origin.y(), p.origin.z()});
+    for (const Vec3& e : p.edge) h.add({e.x(), e.y(), e.z()});
   }
-  return h;
+  return h.value();
 }
 
 Result<bool> SheetPart::split(const Vec2& point, const Vec2& direction, double offset_mm, std::vector<Plate>& moving,

@@ -2,6 +2,7 @@
 
 #include "kernel/mesh_bvh.h"
 #include "machine_models/p4/organ_geometry.h"
+#include "machine_models/p4/plate_shapes.h"
 #include "occt_adapters/exact_measures.h"
 #include "occt_adapters/shape_builders.h"
 
@@ -31,24 +32,7 @@ Result<double> exact_clearance(const std::vector<Plate>& plates, const RigidTran
   if (!prism.ok()) return prism.error();
   auto placed_organ = occt::place(prism.value(), organ_pose);
   if (!placed_organ.ok()) return placed_organ.error();
-  std::vector<occt::Shape> boxes;
-  for (const Plate& p : plates) {
-    // A plate is a box with perpendicular edges; make it right-handed by walking an edge backwards.
-    Plate q = p;
-    if (q.edge[0].cross(q.edge[1]).dot(q.edge[2]) < 0.0) {
-      q.origin += q.edge[2];
-      q.edge[2] = -q.edge[2];
-    }
-    RigidTransform pose;
-    for (int k = 0; k < 3; ++k) pose.rotation.col(k) = q.edge[k].normalized();
-    pose.translation = q.origin;
-    auto box = occt::make_box(Vec3::Zero(), Vec3(q.edge[0].norm(), q.edge[1].norm(), q.edge[2].norm()));
-    if (!box.ok()) return box.error();
-    auto placed = occt::place(box.value(), motion_pose * pose);
-    if (!placed.ok()) return placed.error();
-    boxes.push_back(placed.value());
-  }
-  auto compound = occt::make_compound(boxes);
+  auto compound = plates_shape(plates, motion_pose);
   if (!compound.ok()) return compound.error();
   auto d = occt::exact_distance(compound.value(), placed_organ.value());
   if (!d.ok()) return d.error();

@@ -100,84 +100,52 @@ struct Timings {
   }
 };
 
-// --- env/rob ------------------------------------------------------------------------------------
+// --- the four queries, each returning what goes into the checksum ----------------------------
 
-void BM_EnvRob_Collide_Ours(benchmark::State& state) {
-  const Subject& env = subject("meshes/fcl/env.obj");
-  const Subject& rob = subject("meshes/fcl/rob.obj");
+using Query = double (*)(const Subject& a, const RigidTransform& pose_a, const Subject& b, const RigidTransform& pose_b);
+
+double collide_ours(const Subject& a, const RigidTransform& pa, const Subject& b, const RigidTransform& pb) {
   gk::CollisionRequest req;
   req.all_contacts = true;
-  Timings t;
-  double contacts = 0;
-  for (auto _ : state) {
-    contacts = 0;
-    for (const RigidTransform& pose : env_rob_poses()) {
-      const auto t0 = Clock::now();
-      auto r = gk::collide(*env.ours, pose, *rob.ours, RigidTransform{}, req);
-      t.add(t0);
-      contacts += static_cast<double>(r.value().contacts.size());
-    }
-  }
-  t.report(state, contacts);
+  return static_cast<double>(gk::collide(*a.ours, pa, *b.ours, pb, req).value().contacts.size());
 }
 
-void BM_EnvRob_Collide_Fcl(benchmark::State& state) {
-  const Subject& env = subject("meshes/fcl/env.obj");
-  const Subject& rob = subject("meshes/fcl/rob.obj");
-  fcl::CollisionRequestd req(1000000, true);
-  Timings t;
-  double contacts = 0;
-  for (auto _ : state) {
-    contacts = 0;
-    for (const RigidTransform& pose : env_rob_poses()) {
-      const auto t0 = Clock::now();
-      fcl::CollisionResultd res;
-      fcl::collide(env.fcl.get(), to_fcl(pose), rob.fcl.get(), fcl::Transform3d::Identity(), req, res);
-      t.add(t0);
-      contacts += static_cast<double>(res.numContacts());
-    }
-  }
-  t.report(state, contacts);
+double collide_fcl(const Subject& a, const RigidTransform& pa, const Subject& b, const RigidTransform& pb) {
+  const fcl::CollisionRequestd req(1000000, true);
+  fcl::CollisionResultd res;
+  fcl::collide(a.fcl.get(), to_fcl(pa), b.fcl.get(), to_fcl(pb), req, res);
+  return static_cast<double>(res.numContacts());
 }
 
-void BM_EnvRob_Distance_Ours(benchmark::State& state) {
-  const Subject& env = subject("meshes/fcl/env.obj");
-  const Subject& rob = subject("meshes/fcl/rob.obj");
-  Timings t;
-  double sum = 0, node_pairs = 0, triangle_pairs = 0;
-  for (auto _ : state) {
-    sum = 0;
-    for (const RigidTransform& pose : env_rob_poses()) {
-      const auto t0 = Clock::now();
-      auto r = gk::distance(*env.ours, pose, *rob.ours, RigidTransform{});
-      t.add(t0);
-      sum += r.value().distance_mm;
-      node_pairs += static_cast<double>(r.value().stats.node_pairs_tested);
-      triangle_pairs += static_cast<double>(r.value().stats.triangle_pairs_tested);
-    }
-  }
-  t.report(state, sum);
-  state.counters["node_pairs"] = node_pairs / static_cast<double>(t.us.size());
-  state.counters["triangle_pairs"] = triangle_pairs / static_cast<double>(t.us.size());
+double distance_ours(const Subject& a, const RigidTransform& pa, const Subject& b, const RigidTransform& pb) {
+  return gk::distance(*a.ours, pa, *b.ours, pb).value().distance_mm;
 }
 
-void BM_EnvRob_Distance_Fcl(benchmark::State& state) {
-  const Subject& env = subject("meshes/fcl/env.obj");
-  const Subject& rob = subject("meshes/fcl/rob.obj");
-  fcl::DistanceRequestd req(true);
+double distance_fcl(const Subject& a, const RigidTransform& pa, const Subject& b, const RigidTransform& pb) {
+  const fcl::DistanceRequestd req(true);
+  fcl::DistanceResultd res;
+  fcl::distance(a.fcl.get(), to_fcl(pa), b.fcl.get(), to_fcl(pb), req, res);
+  return std::max(res.min_distance, 0.0);
+}
+
+// Times every query on its own. The poses move A (env/rob: env moves, rob stays) or B.
+void measure(benchmark::State& state, const Subject& a, const Subject& b, const std::vector<RigidTransform>& poses,
+             bool poses_move_a, Query query) {
   Timings t;
-  double sum = 0;
+  double checksum = 0;
   for (auto _ : state) {
-    sum = 0;
-    for (const RigidTransform& pose : env_rob_poses()) {
+    checksum = 0;
+    for (const RigidTransform& pose : poses) {
       const auto t0 = Clock::now();
-      fcl::DistanceResultd res;
-      fcl::distance(env.fcl.get(), to_fcl(pose), rob.fcl.get(), fcl::Transform3d::Identity(), req, res);
+      checksum += poses_move_a ? query(a, pose, b, RigidTransform{}) : query(a, RigidTransform{}, b, pose);
       t.add(t0);
-      sum += std::max(res.min_distance, 0.0);
     }
   }
-  t.report(state, sum);
+  t.report(state, checksum);
+}
+
+void env_rob(benchmark::State& state, Query query) {
+  measure(state, subject("meshes/fcl/env.obj"), subject("meshes/fcl/rob.obj"), env_rob_poses(), true, query);
 }
 
 // --- large real meshes near contact ------------------------------------------------------------
@@ -221,87 +189,20 @@ const std::vector<RigidTransform>& near_contact_poses(int pair_index) {
   return cache.emplace(pair_index, poses).first->second;
 }
 
-void BM_Large_Collide_Ours(benchmark::State& state) {
+void large(benchmark::State& state, Query query) {
   const int i = static_cast<int>(state.range(0));
-  const Subject& a = subject(kLargePairs[i].a, kLargePairs[i].scale_a);
-  const Subject& b = subject(kLargePairs[i].b, kLargePairs[i].scale_b);
-  const auto& poses = near_contact_poses(i);
-  gk::CollisionRequest req;
-  req.all_contacts = true;
-  Timings t;
-  double contacts = 0;
-  for (auto _ : state) {
-    contacts = 0;
-    for (const RigidTransform& pose : poses) {
-      const auto t0 = Clock::now();
-      auto r = gk::collide(*a.ours, RigidTransform{}, *b.ours, pose, req);
-      t.add(t0);
-      contacts += static_cast<double>(r.value().contacts.size());
-    }
-  }
-  t.report(state, contacts);
+  measure(state, subject(kLargePairs[i].a, kLargePairs[i].scale_a), subject(kLargePairs[i].b, kLargePairs[i].scale_b),
+          near_contact_poses(i), false, query);
 }
 
-void BM_Large_Collide_Fcl(benchmark::State& state) {
-  const int i = static_cast<int>(state.range(0));
-  const Subject& a = subject(kLargePairs[i].a, kLargePairs[i].scale_a);
-  const Subject& b = subject(kLargePairs[i].b, kLargePairs[i].scale_b);
-  const auto& poses = near_contact_poses(i);
-  fcl::CollisionRequestd req(1000000, true);
-  Timings t;
-  double contacts = 0;
-  for (auto _ : state) {
-    contacts = 0;
-    for (const RigidTransform& pose : poses) {
-      const auto t0 = Clock::now();
-      fcl::CollisionResultd res;
-      fcl::collide(a.fcl.get(), fcl::Transform3d::Identity(), b.fcl.get(), to_fcl(pose), req, res);
-      t.add(t0);
-      contacts += static_cast<double>(res.numContacts());
-    }
-  }
-  t.report(state, contacts);
-}
-
-void BM_Large_Distance_Ours(benchmark::State& state) {
-  const int i = static_cast<int>(state.range(0));
-  const Subject& a = subject(kLargePairs[i].a, kLargePairs[i].scale_a);
-  const Subject& b = subject(kLargePairs[i].b, kLargePairs[i].scale_b);
-  const auto& poses = near_contact_poses(i);
-  Timings t;
-  double sum = 0;
-  for (auto _ : state) {
-    sum = 0;
-    for (const RigidTransform& pose : poses) {
-      const auto t0 = Clock::now();
-      auto r = gk::distance(*a.ours, RigidTransform{}, *b.ours, pose);
-      t.add(t0);
-      sum += r.value().distance_mm;
-    }
-  }
-  t.report(state, sum);
-}
-
-void BM_Large_Distance_Fcl(benchmark::State& state) {
-  const int i = static_cast<int>(state.range(0));
-  const Subject& a = subject(kLargePairs[i].a, kLargePairs[i].scale_a);
-  const Subject& b = subject(kLargePairs[i].b, kLargePairs[i].scale_b);
-  const auto& poses = near_contact_poses(i);
-  fcl::DistanceRequestd req(true);
-  Timings t;
-  double sum = 0;
-  for (auto _ : state) {
-    sum = 0;
-    for (const RigidTransform& pose : poses) {
-      const auto t0 = Clock::now();
-      fcl::DistanceResultd res;
-      fcl::distance(a.fcl.get(), fcl::Transform3d::Identity(), b.fcl.get(), to_fcl(pose), req, res);
-      t.add(t0);
-      sum += std::max(res.min_distance, 0.0);
-    }
-  }
-  t.report(state, sum);
-}
+void BM_EnvRob_Collide_Ours(benchmark::State& s) { env_rob(s, collide_ours); }
+void BM_EnvRob_Collide_Fcl(benchmark::State& s) { env_rob(s, collide_fcl); }
+void BM_EnvRob_Distance_Ours(benchmark::State& s) { env_rob(s, distance_ours); }
+void BM_EnvRob_Distance_Fcl(benchmark::State& s) { env_rob(s, distance_fcl); }
+void BM_Large_Collide_Ours(benchmark::State& s) { large(s, collide_ours); }
+void BM_Large_Collide_Fcl(benchmark::State& s) { large(s, collide_fcl); }
+void BM_Large_Distance_Ours(benchmark::State& s) { large(s, distance_ours); }
+void BM_Large_Distance_Fcl(benchmark::State& s) { large(s, distance_fcl); }
 
 // --- build and refit ----------------------------------------------------------------------------
 

@@ -6,6 +6,7 @@
 #include "kernel/mesh_distance.h"
 #include "machine_models/p4/machine_scene.h"
 #include "machine_models/p4/motion_sweep.h"
+#include "machine_models/p4/plate_shapes.h"
 #include "machine_models/p4/step_validator.h"
 #include "occt_adapters/shape_builders.h"
 #include "occt_adapters/shape_mesher.h"
@@ -135,20 +136,7 @@ TEST(P4Safety, ConservativeAdvancementAgreesWithTheOcctSweptSolid) {
     std::vector<Plate> plates;
     if (!bend_body(model, r, body, motion, plates)) continue;
     // The swept solid: every moving plate revolved about the bend axis, then meshed.
-    std::vector<occt::Shape> boxes;
-    for (const Plate& p : plates) {
-      Plate q = p;
-      if (q.edge[0].cross(q.edge[1]).dot(q.edge[2]) < 0.0) {
-        q.origin += q.edge[2];
-        q.edge[2] = -q.edge[2];
-      }
-      RigidTransform pose;
-      for (int k = 0; k < 3; ++k) pose.rotation.col(k) = q.edge[k].normalized();
-      pose.translation = q.origin;
-      auto box = occt::make_box(Vec3::Zero(), Vec3(q.edge[0].norm(), q.edge[1].norm(), q.edge[2].norm())).value();
-      boxes.push_back(occt::place(box, pose).value());
-    }
-    const occt::Shape part = occt::make_compound(boxes).value();
+    const occt::Shape part = plates_shape(plates).value();
     auto swept = occt::revolve(part, motion.axis_point, motion.axis_direction, motion.angle_rad * 180.0 / kPi);
     ASSERT_TRUE(swept.ok()) << swept.error().to_string();
     auto meshed = occt::mesh_shape(swept.value(), deflection);
