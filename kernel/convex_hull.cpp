@@ -23,7 +23,7 @@ class Quickhull {
  public:
   explicit Quickhull(const std::vector<Vec3>& p) : p_(p) {}
 
-  Result<TriangleMesh> run() {
+  Result<HullPolytope> run() {
     if (p_.size() < 4) return invalid_argument("points", "a hull needs at least four points");
     for (std::size_t i = 0; i < p_.size(); ++i)
       if (!p_[i].allFinite()) return invalid_argument("points[" + std::to_string(i) + "]", "not finite");
@@ -40,12 +40,13 @@ class Quickhull {
       if (i != tet[0] && i != tet[1] && i != tet[2] && i != tet[3]) all.push_back(i);
     assign(all, 0, static_cast<int>(faces_.size()));
 
+    // Faces are appended as the hull grows, so one pass over the growing list visits every face
+    // that ever has outside points; a face that dies is skipped.
     for (std::size_t f = 0; f < faces_.size(); ++f) {
       if (!faces_[f].alive || faces_[f].outside.empty()) continue;
       add_point(static_cast<int>(f), farthest(static_cast<int>(f)));
-      f = static_cast<std::size_t>(-1);  // rescan: new faces were appended, old ones died
     }
-    return to_mesh();
+    return to_polytope();
   }
 
  private:
@@ -164,23 +165,24 @@ class Quickhull {
     assign(orphans, first_new, static_cast<int>(faces_.size()));
   }
 
-  Result<TriangleMesh> to_mesh() const {
+  HullPolytope to_polytope() const {
     std::vector<int> remap(p_.size(), -1);
-    std::vector<Vec3> vertices;
-    std::vector<TriangleMesh::Face> faces;
+    HullPolytope out;
+    std::vector<Vec3>& vertices = out.corners;
+    std::vector<std::array<std::uint32_t, 3>>& faces = out.faces;
     for (const HullFace& f : faces_) {
       if (!f.alive) continue;
-      TriangleMesh::Face out;
+      std::array<std::uint32_t, 3> face;
       for (int k = 0; k < 3; ++k) {
         if (remap[f.v[k]] < 0) {
           remap[f.v[k]] = static_cast<int>(vertices.size());
           vertices.push_back(p_[f.v[k]]);
         }
-        out[k] = static_cast<std::uint32_t>(remap[f.v[k]]);
+        face[k] = static_cast<std::uint32_t>(remap[f.v[k]]);
       }
-      faces.push_back(out);
+      faces.push_back(face);
     }
-    return TriangleMesh::create(std::move(vertices), std::move(faces));
+    return out;
   }
 
   const std::vector<Vec3>& p_;
@@ -190,6 +192,12 @@ class Quickhull {
 
 }  // namespace
 
-Result<TriangleMesh> convex_hull(const std::vector<Vec3>& points) { return Quickhull(points).run(); }
+Result<HullPolytope> convex_hull_polytope(const std::vector<Vec3>& points) { return Quickhull(points).run(); }
+
+Result<TriangleMesh> convex_hull(const std::vector<Vec3>& points) {
+  auto hull = convex_hull_polytope(points);
+  if (!hull.ok()) return hull.error();
+  return TriangleMesh::create(std::move(hull.value().corners), std::move(hull.value().faces));
+}
 
 }  // namespace gk

@@ -6,6 +6,8 @@
 #include "kernel/status.h"
 #include "kernel/triangle_mesh.h"
 
+#include <array>
+#include <cstdint>
 #include <vector>
 
 namespace gk {
@@ -14,5 +16,13 @@ namespace gk {
 // hull's faces but not at its corners are left out. Fewer than four points, non-finite points, or
 // all points coplanar are errors (a flat set has no volume to bound a sweep with).
 Result<TriangleMesh> convex_hull(const std::vector<Vec3>& points);
+
+// The same hull as bare corners and outward-wound faces (indices into corners), without building
+// and validating a TriangleMesh: for hot loops that only need the planes and corners.
+struct HullPolytope {
+  std::vector<Vec3> corners;
+  std::vector<std::array<std::uint32_t, 3>> faces;
+};
+Result<HullPolytope> convex_hull_polytope(const std::vector<Vec3>& points);
 
 }  // namespace gk

@@ -1,6 +1,7 @@
 #include "machine_models/p4/motion_sweep.h"
 
 #include "kernel/convex_hull.h"
+#include "kernel/exact_predicates.h"
 #include "kernel/mesh_distance.h"
 #include "machine_models/p4/organ_geometry.h"
 
@@ -74,14 +75,14 @@ namespace {
 // shapes' face normals: a gap along any unit axis is a lower bound of their distance, so a gap
 // beyond the bound proves them apart (and rules out either lying inside the other). Edge-edge axes
 // are not tried: an organ they alone would separate goes on to the narrow phase.
-bool hull_clears(const TriangleMesh& hull, const SweepOrgan& organ, double bound) {
+bool hull_clears(const HullPolytope& hull, const SweepOrgan& organ, double bound) {
   const TriangleMesh& om = organ.mesh->mesh();
   std::vector<Vec3> organ_points;
   organ_points.reserve(om.vertices().size());
   for (const Vec3& v : om.vertices()) organ_points.push_back(organ.pose.apply(v));
   auto separated_along = [&](const Vec3& axis) {
     double hull_lo = std::numeric_limits<double>::infinity(), hull_hi = -hull_lo;
-    for (const Vec3& v : hull.vertices()) {
+    for (const Vec3& v : hull.corners) {
       const double p = axis.dot(v);
       hull_lo = std::min(hull_lo, p);
       hull_hi = std::max(hull_hi, p);
@@ -99,12 +100,54 @@ bool hull_clears(const TriangleMesh& hull, const SweepOrgan& organ, double bound
     const Vec3 n = organ.pose.apply_direction((tri[1] - tri[0]).cross(tri[2] - tri[0]));
     if (n.norm() > 0.0 && separated_along(n.normalized())) return true;
   }
-  for (std::size_t t = 0; t < hull.triangle_count(); ++t) {
-    const Triangle tri = hull.triangle(t);
-    const Vec3 n = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+  for (const auto& f : hull.faces) {
+    const Vec3& a = hull.corners[f[0]];
+    const Vec3 n = (hull.corners[f[1]] - a).cross(hull.corners[f[2]] - a);
     if (n.norm() > 0.0 && separated_along(n.normalized())) return true;
   }
   return false;
+}
+
+// The prism over the 2D convex hull of the points' XY footprints, from their lowest to their
+// highest Z: it contains their 3D hull. Andrew's monotone chain with exact turn tests.
+Result<HullPolytope> vertical_prism_hull(const std::vector<Vec3>& points) {
+  std::vector<Vec2> xy;
+  double z0 = std::numeric_limits<double>::infinity(), z1 = -z0;
+  for (const Vec3& p : points) {
+    xy.emplace_back(p.x(), p.y());
+    z0 = std::min(z0, p.z());
+    z1 = std::max(z1, p.z());
+  }
+  std::sort(xy.begin(), xy.end(), [](const Vec2& a, const Vec2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  xy.erase(std::unique(xy.begin(), xy.end()), xy.end());
+  if (xy.size() < 3 || !(z1 > z0)) return invalid_argument("points", "no prism: flat or collinear footprint");
+  std::vector<Vec2> ring(2 * xy.size());
+  std::size_t k = 0;
+  auto turn = [](const Vec2& a, const Vec2& b, const Vec2& c) { return exact::orient2d(a.x(), a.y(), b.x(), b.y(), c.x(), c.y()); };
+  for (std::size_t i = 0; i < xy.size(); ++i) {  // lower chain
+    while (k >= 2 && turn(ring[k - 2], ring[k - 1], xy[i]) <= 0) --k;
+    ring[k++] = xy[i];
+  }
+  for (std::size_t i = xy.size() - 1, lower = k + 1; i-- > 0;) {  // upper chain
+    while (k >= lower && turn(ring[k - 2], ring[k - 1], xy[i]) <= 0) --k;
+    ring[k++] = xy[i];
+  }
+  ring.resize(k - 1);  // counter-clockwise, last point repeated the first
+  if (ring.size() < 3) return invalid_argument("points", "no prism: collinear footprint");
+  HullPolytope prism;
+  const auto n = static_cast<std::uint32_t>(ring.size());
+  for (const Vec2& q : ring) prism.corners.emplace_back(q.x(), q.y(), z0);
+  for (const Vec2& q : ring) prism.corners.emplace_back(q.x(), q.y(), z1);
+  for (std::uint32_t i = 1; i + 1 < n; ++i) {
+    prism.faces.push_back({n, n + i, n + i + 1});  // top, seen from above counter-clockwise
+    prism.faces.push_back({0, i + 1, i});          // bottom
+  }
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const std::uint32_t j = (i + 1) % n;
+    prism.faces.push_back({i, j, n + j});
+    prism.faces.push_back({i, n + j, n + i});
+  }
+  return prism;
 }
 
 }  // namespace
@@ -120,7 +163,10 @@ Result<HullLodResult> hull_lod(const std::vector<MovingBody>& bodies, const Moti
     const std::vector<MovingBody> one = {body};
     const std::vector<Vec3> pts = sampled_points(one, motion, out.samples);
     for (const Vec3& p : pts) out.swept_box.extend(p);
-    auto hull = convex_hull(pts);
+    // Turning about the vertical, the sweep lies in the prism over the 2D hull of the samples'
+    // footprints: cheaper than a 3D hull of hundreds of coplanar points, and as safe.
+    const bool vertical = motion.rotation && std::fabs(motion.axis_direction.z()) == 1.0;
+    auto hull = vertical ? vertical_prism_hull(pts) : convex_hull_polytope(pts);
     if (!hull.ok()) {  // a flat sweep has no hull: this body clears nothing here
       std::fill(cleared.begin(), cleared.end(), 0);
       continue;
@@ -228,9 +274,20 @@ Result<SweepOutcome> conservative_advance(const std::vector<MovingBody>& bodies,
   // apart by more than the required clearance can never meet, and need no query at all.
   std::vector<std::pair<double, double>> body_axial(bodies.size());
   for (std::size_t b = 0; b < bodies.size(); ++b) body_axial[b] = axial_extent(bodies[b].points, motion);
+  // Per-body hull filter: which (body, organ) pairs the body's own sweep hull already clears.
+  std::vector<std::vector<char>> cleared(bodies.size(), std::vector<char>(organs.size(), 0));
+  if (options.body_hull_step_rad > 0.0) {
+    for (std::size_t b = 0; b < bodies.size(); ++b) {
+      auto lod = hull_lod({bodies[b]}, motion, organs, options.required_clearance_mm, options.body_hull_step_rad);
+      if (!lod.ok()) return lod.error();
+      std::fill(cleared[b].begin(), cleared[b].end(), 1);
+      for (int i : lod.value().remaining) cleared[b][i] = 0;
+    }
+  }
   for (std::size_t i = 0; i < organs.size(); ++i)
   for (std::size_t b = 0; b < bodies.size(); ++b) {
     const MovingBody& body = bodies[b];
+    if (cleared[b][i]) continue;
     if (motion.rotation) {
       const Aabb& lb = organs[i].mesh->root_bounds();
       std::vector<Vec3> corners;

@@ -78,6 +78,9 @@ struct AdvanceOptions {
   double contact_resolution_mm = 1e-3;
   double step_fraction = 0.8;          // of the proven-safe advance taken per step (certifies 1 - f)
   int max_steps = 20000;
+  // When > 0, each body's own swept hull (sampled at most this far apart) first clears the organs
+  // it can: only the pairs it cannot clear are advanced. [rad]
+  double body_hull_step_rad = 0.0;
 };
 
 Result<SweepOutcome> conservative_advance(const std::vector<MovingBody>& bodies, const Motion& motion,

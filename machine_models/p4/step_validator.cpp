@@ -1,6 +1,8 @@
 #include "machine_models/p4/step_validator.h"
 
 #include "kernel/mesh_bvh.h"
+#include "kernel/mesh_collision.h"
+#include "kernel/mesh_distance.h"
 #include "machine_models/p4/organ_geometry.h"
 #include "machine_models/p4/plate_shapes.h"
 #include "occt_adapters/exact_measures.h"
@@ -124,7 +126,10 @@ const char* to_string(CorrectionKind kind) {
 // motion, and which organs take part. Cached per part, step and (for manipulator moves) state.
 struct StepValidator::Prepared {
   std::vector<MovingBody> bodies;  // one per rigid group (part, manipulator): for the hull
-  std::vector<MovingBody> pieces;  // the same plates cut into radial bands: for advancement
+  // The same plates cut into radial bands, for advancement: built on first use, since most
+  // answers are settled before the narrow phase.
+  mutable std::vector<MovingBody> pieces;
+  mutable bool pieces_built = false;
   std::vector<Plate> plates;  // the bodies' plates, machine coordinates (for the exact phase)
   Motion motion;
   bool is_static = false;     // CLAMP: no motion
@@ -206,19 +211,6 @@ Result<std::shared_ptr<const StepValidator::Prepared>> StepValidator::prepare(co
       prepared->is_static = true;
       prepared->motion = {false, Vec3::Zero(), Vec3::UnitX(), 0.0, Vec3::Zero()};
       break;
-  }
-  // Advancement steps by the fastest point of a body: cutting the plates into bands of growing
-  // distance from the rotation axis lets the slow band next to a tool take long steps.
-  for (const Plate& plate : prepared->plates) {
-    for (const Plate& band : radial_bands(plate, prepared->motion)) {
-      MovingBody piece;
-      TriangleMesh mesh = plates_mesh({band});
-      piece.points = mesh.vertices();
-      auto bvh = MeshBvh::build(std::make_shared<const TriangleMesh>(std::move(mesh)));
-      if (!bvh.ok()) return bvh.error();
-      piece.mesh = bvh.value();
-      prepared->pieces.push_back(std::move(piece));
-    }
   }
   if (prepared_.size() >= options_.memo_capacity) prepared_.clear();
   prepared_[key] = prepared;
@@ -321,34 +313,44 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
     return answer;
   }
 
-  // CLAMP: a static check; the blankholder pressing on the sheet is a touch, not a collision.
+  // CLAMP: a static check. The blankholder pressing on the sheet is an intended touch, so the
+  // clamp-relative organs are tested lifted by the required clearance: anything of the part that
+  // still meets them stands up into the blankholder by more than that.
   if (prep.is_static) {
     t = Clock::now();
     answer.decided_by = Stage::kNarrow;
     answer.verdict = Verdict::kClear;
+    const RigidTransform lift = RigidTransform::from_translation(Vec3(0, 0, options_.required_clearance_mm));
     for (const SweepOrgan& c : candidates) {
+      const Organ& organ = organs[c.index];
+      const RigidTransform pose = organ.relative_to_clamp ? lift * c.pose : c.pose;
       for (const MovingBody& b : prep.bodies) {
-        auto v = assess(*b.mesh, RigidTransform{}, *c.mesh, c.pose);
-        if (!v.ok()) return v.error();
-        const VerdictResult& r = v.value();
-        if (r.verdict == Verdict::kCollision || r.verdict == Verdict::kInconclusive) {
+        auto hit = collide(*b.mesh, RigidTransform{}, *c.mesh, pose);
+        if (!hit.ok()) return hit.error();
+        if (hit.value().colliding) {
           StepCollision col;
-          col.organ = organs[c.index].name;
-          col.point_mm = r.point_a;
-          col.organ_point_mm = r.point_b;
+          col.organ = organ.name;
+          col.point_mm = hit.value().contacts.front().point;
+          col.organ_point_mm = col.point_mm;
           double depth = 0.0;
           const RigidTransform to_organ = c.pose.inverse();
           for (const Vec3& p : b.points)
-            depth = std::max(depth, depth_inside_prism(organs[c.index].profile_yz, organs[c.index].x_min, organs[c.index].x_max,
-                                                       to_organ.apply(p)));
+            depth = std::max(depth, depth_inside_prism(organ.profile_yz, organ.x_min, organ.x_max, to_organ.apply(p)));
           col.depth_mm = depth;
-          col.first_contact_fraction = 0.0;
           answer.collisions.push_back(col);
           answer.verdict = Verdict::kCollision;
-        } else if (r.distance_mm < answer.min_clearance_mm && r.verdict == Verdict::kClear) {
-          answer.min_clearance_mm = r.distance_mm;
-          answer.clearance_organ = organs[c.index].name;
-          answer.clearance_point_mm = r.point_a;
+          continue;
+        }
+        // Clearance from the organs that are not pressing on the sheet (within 50 mm).
+        if (organ.relative_to_clamp && organ.engaged) continue;
+        DistanceRequest near;
+        near.upper_bound_mm = std::min(answer.min_clearance_mm, 50.0);
+        auto d = distance(*b.mesh, RigidTransform{}, *c.mesh, c.pose, near);
+        if (!d.ok()) return d.error();
+        if (d.value().found) {
+          answer.min_clearance_mm = d.value().distance_mm;
+          answer.clearance_organ = organ.name;
+          answer.clearance_point_mm = d.value().point_a;
         }
       }
     }
@@ -376,6 +378,23 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
   t = Clock::now();
   AdvanceOptions adv;
   adv.required_clearance_mm = options_.required_clearance_mm;
+  adv.body_hull_step_rad = step_rad;
+  if (!prep.pieces_built) {
+    // Advancement steps by the fastest point of a body: cutting the plates into bands of growing
+    // distance from the rotation axis lets the slow band next to a tool take long steps.
+    for (const Plate& plate : prep.plates) {
+      for (const Plate& band : radial_bands(plate, prep.motion)) {
+        MovingBody piece;
+        TriangleMesh mesh = plates_mesh({band});
+        piece.points = mesh.vertices();
+        auto bvh = MeshBvh::build(std::make_shared<const TriangleMesh>(std::move(mesh)));
+        if (!bvh.ok()) return bvh.error();
+        piece.mesh = bvh.value();
+        prep.pieces.push_back(std::move(piece));
+      }
+    }
+    prep.pieces_built = true;
+  }
   auto swept_or = conservative_advance(prep.pieces, prep.motion, narrow, adv);
   if (!swept_or.ok()) return swept_or.error();
   const SweepOutcome& out = swept_or.value();

@@ -120,6 +120,49 @@ TEST(P4Safety, HullLevelOfDetailNeverClearsWhatTheExactSweepReaches) {
   RecordProperty("exact_collisions", exact_collisions);
 }
 
+TEST(P4Safety, VerticalPrismHullNeverClearsWhatARotationReaches) {
+  // ROTATE steps bound the sweep by a prism over the 2D hull of the sampled footprints.
+  const MachineModel model = default_machine_model().value();
+  auto scene = MachineScene::build(model).value();
+  testing::Rng rng(1618);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int cleared_pairs = 0, collisions = 0;
+  AdvanceOptions adv;
+  adv.required_clearance_mm = 0.1;
+  for (int trial = 0; trial < 300; ++trial) {
+    RandomBend r = random_bend(rng, model);
+    r.state.manipulator_y_mm = -200.0 - 1500.0 * u(rng);
+    ASSERT_TRUE(scene->apply_state(r.state).ok());
+    BendStep place = r.step;
+    place.kind = StepKind::kRotate;
+    const RigidTransform placement = part_placement(r.part, place);
+    std::vector<Plate> plates;
+    for (const Plate& p : r.part.plates()) plates.push_back(p.transformed(placement));
+    MovingBody body;
+    TriangleMesh mesh = plates_mesh(plates);
+    body.points = mesh.vertices();
+    body.mesh = MeshBvh::build(std::make_shared<const TriangleMesh>(std::move(mesh))).value();
+    const double angle = (u(rng) < 0.5 ? -1.0 : 1.0) * (10.0 + 170.0 * u(rng));
+    const Motion motion{true, Vec3(-300.0 + 600.0 * u(rng), r.state.manipulator_y_mm, 0.0), Vec3::UnitZ(),
+                        angle * kPi / 180.0, Vec3::Zero()};
+    std::vector<SweepOrgan> organs;
+    for (std::size_t i = 0; i < scene->organs().size(); ++i)
+      if (!scene->organs()[i].support) organs.push_back({static_cast<int>(i), scene->organs()[i].mesh.get(), scene->organs()[i].pose});
+    const HullLodResult lod = hull_lod({body}, motion, organs, adv.required_clearance_mm, 30.0 * kPi / 180.0).value();
+    std::vector<char> remaining(organs.size(), 0);
+    for (int i : lod.remaining) remaining[i] = 1;
+    for (std::size_t i = 0; i < organs.size(); ++i) {
+      const SweepOutcome exact = conservative_advance({body}, motion, {organs[i]}, adv).value();
+      if (exact.collided) ++collisions;
+      if (remaining[i]) continue;
+      ++cleared_pairs;
+      ASSERT_FALSE(exact.collided) << "trial " << trial << ": the prism cleared " << scene->organs()[organs[i].index].name;
+    }
+  }
+  EXPECT_GT(cleared_pairs, 3000);
+  EXPECT_GT(collisions, 100);
+}
+
 TEST(P4Safety, ConservativeAdvancementAgreesWithTheOcctSweptSolid) {
   const MachineModel model = default_machine_model().value();
   auto scene = MachineScene::build(model).value();
