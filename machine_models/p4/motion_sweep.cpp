@@ -108,39 +108,57 @@ bool hull_clears(const HullPolytope& hull, const SweepOrgan& organ, double bound
   return false;
 }
 
-// The prism over the 2D convex hull of the points' XY footprints, from their lowest to their
-// highest Z: it contains their 3D hull. Andrew's monotone chain with exact turn tests.
-Result<HullPolytope> vertical_prism_hull(const std::vector<Vec3>& points) {
-  std::vector<Vec2> xy;
-  double z0 = std::numeric_limits<double>::infinity(), z1 = -z0;
+// The prism over the 2D convex hull of the points projected along the rotation axis, spanning
+// their range along the axis: it contains their 3D hull. Rotating bodies are sampled on circles
+// around the axis, which puts hundreds of them on a few planes: this avoids the 3D hull's exact
+// arithmetic on all those coplanar points, and is exact for plates aligned with the axis. Andrew's
+// monotone chain with exact turn tests.
+Result<HullPolytope> axial_prism_hull(const std::vector<Vec3>& points, const Vec3& origin, const Vec3& axis) {
+  const Vec3 w = axis.normalized();
+  const Vec3 u = (std::fabs(w.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(w).normalized();
+  const Vec3 v = w.cross(u);
+  std::vector<Vec2> uv;
+  double w0 = std::numeric_limits<double>::infinity(), w1 = -w0;
   for (const Vec3& p : points) {
-    xy.emplace_back(p.x(), p.y());
-    z0 = std::min(z0, p.z());
-    z1 = std::max(z1, p.z());
+    const Vec3 r = p - origin;
+    uv.emplace_back(r.dot(u), r.dot(v));
+    w0 = std::min(w0, r.dot(w));
+    w1 = std::max(w1, r.dot(w));
   }
-  std::sort(xy.begin(), xy.end(), [](const Vec2& a, const Vec2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
-  xy.erase(std::unique(xy.begin(), xy.end()), xy.end());
-  if (xy.size() < 3 || !(z1 > z0)) return invalid_argument("points", "no prism: flat or collinear footprint");
-  std::vector<Vec2> ring(2 * xy.size());
+  std::sort(uv.begin(), uv.end(), [](const Vec2& a, const Vec2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  uv.erase(std::unique(uv.begin(), uv.end()), uv.end());
+  if (uv.size() < 3 || !(w1 > w0)) return invalid_argument("points", "no prism: flat or collinear footprint");
+  std::vector<Vec2> ring(2 * uv.size());
   std::size_t k = 0;
   auto turn = [](const Vec2& a, const Vec2& b, const Vec2& c) { return exact::orient2d(a.x(), a.y(), b.x(), b.y(), c.x(), c.y()); };
-  for (std::size_t i = 0; i < xy.size(); ++i) {  // lower chain
-    while (k >= 2 && turn(ring[k - 2], ring[k - 1], xy[i]) <= 0) --k;
-    ring[k++] = xy[i];
+  for (std::size_t i = 0; i < uv.size(); ++i) {  // lower chain
+    while (k >= 2 && turn(ring[k - 2], ring[k - 1], uv[i]) <= 0) --k;
+    ring[k++] = uv[i];
   }
-  for (std::size_t i = xy.size() - 1, lower = k + 1; i-- > 0;) {  // upper chain
-    while (k >= lower && turn(ring[k - 2], ring[k - 1], xy[i]) <= 0) --k;
-    ring[k++] = xy[i];
+  for (std::size_t i = uv.size() - 1, lower = k + 1; i-- > 0;) {  // upper chain
+    while (k >= lower && turn(ring[k - 2], ring[k - 1], uv[i]) <= 0) --k;
+    ring[k++] = uv[i];
   }
-  ring.resize(k - 1);  // counter-clockwise, last point repeated the first
+  ring.resize(k - 1);  // counter-clockwise in (u, v); the chain repeated its first point last
   if (ring.size() < 3) return invalid_argument("points", "no prism: collinear footprint");
+  // Projection rounding (a few ulps of the coordinates) is covered by widening the prism slightly.
+  double scale = 1.0;
+  for (const Vec2& q : ring) scale = std::max(scale, q.cwiseAbs().maxCoeff());
+  const double grow = 1e-12 * scale;
+  Vec2 centroid = Vec2::Zero();
+  for (const Vec2& q : ring) centroid += q;
+  centroid /= static_cast<double>(ring.size());
   HullPolytope prism;
   const auto n = static_cast<std::uint32_t>(ring.size());
-  for (const Vec2& q : ring) prism.corners.emplace_back(q.x(), q.y(), z0);
-  for (const Vec2& q : ring) prism.corners.emplace_back(q.x(), q.y(), z1);
+  auto corner = [&](const Vec2& q, double along) {
+    const Vec2 out = q + grow * (q - centroid).normalized();
+    return Vec3(origin + out.x() * u + out.y() * v + along * w);
+  };
+  for (const Vec2& q : ring) prism.corners.push_back(corner(q, w0 - grow));
+  for (const Vec2& q : ring) prism.corners.push_back(corner(q, w1 + grow));
   for (std::uint32_t i = 1; i + 1 < n; ++i) {
-    prism.faces.push_back({n, n + i, n + i + 1});  // top, seen from above counter-clockwise
-    prism.faces.push_back({0, i + 1, i});          // bottom
+    prism.faces.push_back({n, n + i, n + i + 1});  // the +axis cap, counter-clockwise seen from +axis
+    prism.faces.push_back({0, i + 1, i});          // the -axis cap
   }
   for (std::uint32_t i = 0; i < n; ++i) {
     const std::uint32_t j = (i + 1) % n;
@@ -163,10 +181,7 @@ Result<HullLodResult> hull_lod(const std::vector<MovingBody>& bodies, const Moti
     const std::vector<MovingBody> one = {body};
     const std::vector<Vec3> pts = sampled_points(one, motion, out.samples);
     for (const Vec3& p : pts) out.swept_box.extend(p);
-    // Turning about the vertical, the sweep lies in the prism over the 2D hull of the samples'
-    // footprints: cheaper than a 3D hull of hundreds of coplanar points, and as safe.
-    const bool vertical = motion.rotation && std::fabs(motion.axis_direction.z()) == 1.0;
-    auto hull = vertical ? vertical_prism_hull(pts) : convex_hull_polytope(pts);
+    auto hull = motion.rotation ? axial_prism_hull(pts, motion.axis_point, motion.axis_direction) : convex_hull_polytope(pts);
     if (!hull.ok()) {  // a flat sweep has no hull: this body clears nothing here
       std::fill(cleared.begin(), cleared.end(), 0);
       continue;
