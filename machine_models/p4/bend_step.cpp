@@ -59,12 +59,11 @@ RigidTransform part_placement(const SheetPart& part, const BendStep& step) {
   to_machine.rotation.row(2) = Vec3::UnitZ().transpose();
   to_machine.translation = -(to_machine.rotation * q);
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  for (const Plate& p : part.plates())
-    for (const Vec3& c : p.corners()) {
-      const double x = to_machine.apply(c).x();
-      lo = std::min(lo, x);
-      hi = std::max(hi, x);
-    }
+  for (const Vec3& c : part.extent_points()) {
+    const double x = to_machine.apply(c).x();
+    lo = std::min(lo, x);
+    hi = std::max(hi, x);
+  }
   to_machine.translation.x() += -0.5 * (lo + hi) + step.lateral_shift_mm;
   return to_machine;
 }

@@ -106,6 +106,64 @@ SheetPart SheetPart::from_plates(std::vector<Plate> plates, double thickness_mm)
   return p;
 }
 
+Result<SheetPart> SheetPart::from_surface(TriangleMesh surface, double thickness_mm, double deflection_mm) {
+  if (!(thickness_mm > 0.0) || !std::isfinite(thickness_mm)) return invalid_argument("thickness_mm", "must be a positive length");
+  if (!(deflection_mm >= 0.0) || !std::isfinite(deflection_mm)) return invalid_argument("deflection_mm", "must be >= 0");
+  SheetPart part;
+  part.thickness_ = thickness_mm;
+  part.deflection_ = deflection_mm;
+  part.surface_ = std::make_shared<const TriangleMesh>(std::move(surface));
+  return part;
+}
+
+std::vector<Vec3> SheetPart::extent_points() const {
+  if (surface_) return surface_->vertices();
+  std::vector<Vec3> out;
+  for (const Plate& p : plates_)
+    for (const Vec3& c : p.corners()) out.push_back(c);
+  return out;
+}
+
+namespace {
+
+// Keeps the part of polygon `poly` where s(x) >= 0 (one Sutherland-Hodgman step).
+std::vector<Vec3> clip_polygon(const std::vector<Vec3>& poly, const Vec3& n, const Vec3& q, double offset) {
+  std::vector<Vec3> out;
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    const Vec3& a = poly[i];
+    const Vec3& b = poly[(i + 1) % poly.size()];
+    const double sa = n.dot(a - q) - offset, sb = n.dot(b - q) - offset;
+    if (sa >= 0.0) out.push_back(a);
+    if ((sa >= 0.0) != (sb >= 0.0)) out.push_back(a + (sa / (sa - sb)) * (b - a));
+  }
+  return out;
+}
+
+}  // namespace
+
+Result<bool> SheetPart::split_surface(const Vec2& point, const Vec2& direction, double offset_mm,
+                                      std::vector<Vec3>& moving_vertices, std::vector<TriangleMesh::Face>& moving_faces,
+                                      bool& fixed_side_empty) const {
+  if (!surface_) return invalid_argument("part", "has no surface");
+  if (!point.allFinite()) return invalid_argument("bend_line.point", "not finite");
+  if (!direction.allFinite() || !(direction.norm() > 0.0)) return invalid_argument("bend_line.direction", "must be a non-zero vector");
+  const Vec2 d = direction.normalized();
+  const Vec3 n(-d.y(), d.x(), 0.0), q(point.x(), point.y(), 0.0);
+  moving_vertices.clear();
+  moving_faces.clear();
+  fixed_side_empty = true;
+  for (std::size_t t = 0; t < surface_->triangle_count(); ++t) {
+    const Triangle tri = surface_->triangle(t);
+    if (n.dot(tri[0] - q) < 0.0 || n.dot(tri[1] - q) < 0.0 || n.dot(tri[2] - q) < 0.0) fixed_side_empty = false;
+    const std::vector<Vec3> kept = clip_polygon({tri[0], tri[1], tri[2]}, n, q, offset_mm);
+    if (kept.size() < 3) continue;
+    const auto base = static_cast<std::uint32_t>(moving_vertices.size());
+    moving_vertices.insert(moving_vertices.end(), kept.begin(), kept.end());
+    for (std::uint32_t k = 1; k + 1 < kept.size(); ++k) moving_faces.push_back({base, base + k, base + k + 1});
+  }
+  return true;
+}
+
 TriangleMesh plates_mesh(const std::vector<Plate>& plates) {
   std::vector<Vec3> v;
   std::vector<TriangleMesh::Face> f;
@@ -135,6 +193,11 @@ TriangleMesh SheetPart::mesh(std::vector<int>* plate_of_triangle) const {
 std::uint64_t SheetPart::content_hash() const {
   ContentHash h;
   h.add(thickness_);
+  if (surface_) {
+    h.add({deflection_, static_cast<double>(surface_->triangle_count())});
+    for (const Vec3& v : surface_->vertices()) h.add({v.x(), v.y(), v.z()});
+    for (const auto& f : surface_->faces()) h.add({double(f[0]), double(f[1]), double(f[2])});
+  }
   for (const Plate& p : plates_) {
     h.add({p.origin.x(), p.origin.y(), p.origin.z()});
     for (const Vec3& e : p.edge) h.add({e.x(), e.y(), e.z()});
@@ -195,7 +258,16 @@ SheetPart SheetPart::turned_over(const Vec2& point, const Vec2& axis) const {
                               RigidTransform::from_translation(-c);
   SheetPart out;
   out.thickness_ = thickness_;
+  out.deflection_ = deflection_;
   for (const Plate& p : plates_) out.plates_.push_back(p.transformed(flip));
+  if (surface_) {
+    std::vector<Vec3> v = surface_->vertices();
+    for (Vec3& x : v) x = flip.apply(x);
+    // A rotation keeps the winding outward: only the positions change.
+    TriangleMesh turned = *surface_;
+    (void)turned.set_vertices(std::move(v));
+    out.surface_ = std::make_shared<const TriangleMesh>(std::move(turned));
+  }
   return out;
 }
 

@@ -7,6 +7,7 @@
 #include "kernel/status.h"
 #include "kernel/triangle_mesh.h"
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -52,6 +53,15 @@ class SheetPart {
   // Validates the spec (positive sizes, angles within (-180, 180), tabs inside the blank).
   static Result<SheetPart> create(const SheetPartSpec& spec);
   static SheetPart from_plates(std::vector<Plate> plates, double thickness_mm);
+  // A part given as a B-Rep, by its tessellation (e.g. occt::mesh_shape of a STEP part), in part
+  // coordinates: the blank's lower face on Z = 0. The deflection (how far the mesh may lie from
+  // the exact surface) is added to every clearance the part is checked with.
+  static Result<SheetPart> from_surface(TriangleMesh surface, double thickness_mm, double deflection_mm);
+  bool has_surface() const { return surface_ != nullptr; }
+  const TriangleMesh& surface() const { return *surface_; }
+  double deflection_mm() const { return deflection_; }
+  // Points whose extent is the part's: plate corners, or surface vertices.
+  std::vector<Vec3> extent_points() const;
 
   const std::vector<Plate>& plates() const { return plates_; }
   double thickness_mm() const { return thickness_; }
@@ -67,6 +77,11 @@ class SheetPart {
   Result<bool> split(const Vec2& point, const Vec2& direction, double offset_mm, std::vector<Plate>& moving,
                      std::vector<Plate>& fixed) const;
 
+  // The same split for a part given by its surface: triangles are clipped at the plane(s); the
+  // moving side comes back as a triangle soup (empty when nothing lies there).
+  Result<bool> split_surface(const Vec2& point, const Vec2& direction, double offset_mm, std::vector<Vec3>& moving_vertices,
+                             std::vector<TriangleMesh::Face>& moving_faces, bool& fixed_side_empty) const;
+
   // The part turned over (180 degrees about the in-plane axis through `point` along `axis`),
   // resting again on Z = 0.
   SheetPart turned_over(const Vec2& point, const Vec2& axis) const;
@@ -74,6 +89,8 @@ class SheetPart {
  private:
   std::vector<Plate> plates_;
   double thickness_ = 0.0;
+  std::shared_ptr<const TriangleMesh> surface_;
+  double deflection_ = 0.0;
 };
 
 TriangleMesh plates_mesh(const std::vector<Plate>& plates);

@@ -132,6 +132,8 @@ struct StepValidator::Prepared {
   mutable bool pieces_built = false;
   std::vector<Plate> plates;  // the bodies' plates, machine coordinates (for the exact phase)
   Motion motion;
+  double extra_clearance_mm = 0.0;  // a tessellated part's deflection, added to every clearance
+  bool exact_possible = true;       // the plates are the part's exact geometry
   bool is_static = false;     // CLAMP: no motion
   double lift_mm = 0.0;       // clamp-relative organs raised by this during the step
 };
@@ -157,7 +159,35 @@ Result<std::shared_ptr<const StepValidator::Prepared>> StepValidator::prepare(co
   const RigidTransform placement = part_placement(part, step);
   const double t = part.thickness_mm();
   std::vector<Plate> plates;
-  if (is_bend(step.kind)) {
+  if (part.has_surface()) {
+    // A part given by its surface: one body of (clipped) triangles; no plates, so the exact phase
+    // is replaced by adding the tessellation's deflection to the clearance.
+    std::vector<Vec3> vertices;
+    std::vector<TriangleMesh::Face> faces;
+    bool fixed_empty = true;
+    if (is_bend(step.kind)) {
+      auto split = part.split_surface(step.bend_point_mm, step.bend_direction, model.bend_zone_mm, vertices, faces, fixed_empty);
+      if (!split.ok()) return split.error();
+      if (faces.empty()) return invalid_argument("bend_line", "nothing of the part lies on the moving side beyond the bend zone");
+      if (fixed_empty) return invalid_argument("bend_line", "nothing of the part is left under the blankholder");
+    } else {
+      vertices = part.surface().vertices();
+      faces = part.surface().faces();
+    }
+    for (Vec3& v : vertices) v = placement.apply(v);
+    auto mesh = TriangleMesh::create(std::move(vertices), std::move(faces), {true});
+    if (!mesh.ok()) return mesh.error();
+    MovingBody body;
+    body.points = mesh.value().vertices();
+    auto bvh = MeshBvh::build(std::make_shared<const TriangleMesh>(std::move(mesh).value()));
+    if (!bvh.ok()) return bvh.error();
+    body.mesh = bvh.value();
+    prepared->bodies.push_back(body);
+    prepared->pieces.push_back(body);
+    prepared->pieces_built = true;
+    prepared->extra_clearance_mm = part.deflection_mm();
+    prepared->exact_possible = false;
+  } else if (is_bend(step.kind)) {
     std::vector<Plate> moving, fixed;
     auto split = part.split(step.bend_point_mm, step.bend_direction, model.bend_zone_mm, moving, fixed);
     if (!split.ok()) return split.error();
@@ -168,7 +198,8 @@ Result<std::shared_ptr<const StepValidator::Prepared>> StepValidator::prepare(co
     plates = part.plates();
   }
   for (Plate& p : plates) p = p.transformed(placement);
-  std::vector<std::vector<Plate>> groups = {plates};
+  std::vector<std::vector<Plate>> groups;
+  if (!plates.empty()) groups.push_back(plates);
   if (step.kind == StepKind::kRotate || step.kind == StepKind::kApproach || step.kind == StepKind::kRetract) {
     // The manipulator's rotator column rides with the part: a body of its own, so that each gets
     // a tight hull (the column turns about its own axis and sweeps little).
@@ -186,6 +217,7 @@ Result<std::shared_ptr<const StepValidator::Prepared>> StepValidator::prepare(co
     auto bvh = MeshBvh::build(std::make_shared<const TriangleMesh>(std::move(mesh)));
     if (!bvh.ok()) return bvh.error();
     body.mesh = bvh.value();
+    if (prepared->pieces_built) prepared->pieces.push_back(body);  // a surface part's bodies are its pieces
     prepared->bodies.push_back(std::move(body));
     prepared->plates.insert(prepared->plates.end(), group.begin(), group.end());
   }
@@ -271,7 +303,8 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
   } else {
     swept = swept_bounds(prep.bodies, prep.motion, step_rad);
   }
-  swept = swept.expanded(options_.required_clearance_mm);
+  const double clearance = options_.required_clearance_mm + prep.extra_clearance_mm;
+  swept = swept.expanded(clearance);
   Aabb machine;
   for (const Organ& o : organs)
     if (takes_part(o)) machine.extend(o.box);
@@ -300,7 +333,7 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
     answer.lowest_point_mm = lowest;
     candidates.erase(std::remove_if(candidates.begin(), candidates.end(),
                                     [&](const SweepOrgan& c) {
-                                      return organs[c.index].box.max.z() < lowest - options_.required_clearance_mm;
+                                      return organs[c.index].box.max.z() < lowest - clearance;
                                     }),
                      candidates.end());
   }
@@ -320,7 +353,7 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
     t = Clock::now();
     answer.decided_by = Stage::kNarrow;
     answer.verdict = Verdict::kClear;
-    const RigidTransform lift = RigidTransform::from_translation(Vec3(0, 0, options_.required_clearance_mm));
+    const RigidTransform lift = RigidTransform::from_translation(Vec3(0, 0, clearance));
     for (const SweepOrgan& c : candidates) {
       const Organ& organ = organs[c.index];
       const RigidTransform pose = organ.relative_to_clamp ? lift * c.pose : c.pose;
@@ -362,7 +395,7 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
 
   // 4. Hull level of detail.
   t = Clock::now();
-  auto lod = hull_lod(prep.bodies, prep.motion, candidates, options_.required_clearance_mm, step_rad);
+  auto lod = hull_lod(prep.bodies, prep.motion, candidates, clearance, step_rad);
   if (!lod.ok()) return lod.error();
   std::vector<SweepOrgan> narrow;
   for (int i : lod.value().remaining) narrow.push_back(candidates[i]);
@@ -377,7 +410,7 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
   // 5. Narrow phase.
   t = Clock::now();
   AdvanceOptions adv;
-  adv.required_clearance_mm = options_.required_clearance_mm;
+  adv.required_clearance_mm = clearance;
   adv.body_hull_step_rad = step_rad;
   if (!prep.pieces_built) {
     // Advancement steps by the fastest point of a body: cutting the plates into bands of growing
@@ -442,7 +475,7 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
   // never falls below the required one between samples on these meshes; a near miss is measured
   // again on the B-Rep (the moving plates and the organ's prism) at the closest sampled pose, so a
   // tessellation can never turn a real collision into a clear answer.
-  if (out.min_clearance_mm < options_.required_clearance_mm + options_.exact_window_mm) {
+  if (prep.exact_possible && out.min_clearance_mm < options_.required_clearance_mm + options_.exact_window_mm) {
     t = Clock::now();
     answer.decided_by = Stage::kExact;
     const SweepOrgan& near = narrow[out.min_clearance_organ];
