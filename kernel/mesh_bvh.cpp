@@ -67,8 +67,15 @@ Result<std::shared_ptr<MeshBvh>> MeshBvh::build(std::shared_ptr<const TriangleMe
   const Aabb bounds = bvh->mesh_->bounds();
   root.Add(BVH_Vec3d(bounds.min.x(), bounds.min.y(), bounds.min.z()));
   root.Add(BVH_Vec3d(bounds.max.x(), bounds.max.y(), bounds.max.z()));
-  const BVH_BinnedBuilder<double, 3, 32> builder(options.leaf_size, BVH_Constants_MaxTreeDepth);
-  builder.Build(bvh->impl_->set.get(), &bvh->impl_->tree, root);
+  // Small meshes (machine organs, sheet plates) build several times faster with 8 SAH bins, and
+  // their trees are as good; large meshes get 32.
+  if (bvh->mesh_->triangle_count() <= 512) {
+    const BVH_BinnedBuilder<double, 3, 8> builder(options.leaf_size, BVH_Constants_MaxTreeDepth);
+    builder.Build(bvh->impl_->set.get(), &bvh->impl_->tree, root);
+  } else {
+    const BVH_BinnedBuilder<double, 3, 32> builder(options.leaf_size, BVH_Constants_MaxTreeDepth);
+    builder.Build(bvh->impl_->set.get(), &bvh->impl_->tree, root);
+  }
   bvh->reload_corners();
   bvh->reload_node_boxes();
   return bvh;

@@ -43,7 +43,7 @@ TEST(MeshBvh, EveryTriangleInExactlyOneLeafInsideItsBox) {
   Rng rng(7);
   for (int leaf_size : {1, 4}) {
     auto bvh = MeshBvh::build(testing::share(testing::random_closed_blob(rng, 3, 10.0, 0.3, Vec3::Zero())),
-                              {leaf_size, 32});
+                              {leaf_size});
     ASSERT_TRUE(bvh.ok());
     expect_tree_bounds_triangles(*bvh.value());
     EXPECT_LE(bvh.value()->depth(), 32);
@@ -53,7 +53,7 @@ TEST(MeshBvh, EveryTriangleInExactlyOneLeafInsideItsBox) {
 TEST(MeshBvh, InvalidOptionsAreErrors) {
   Rng rng(1);
   auto mesh = testing::share(testing::random_soup(rng, 10, 5.0, 1.0));
-  auto bad = MeshBvh::build(mesh, {0, 32});
+  auto bad = MeshBvh::build(mesh, {0});
   ASSERT_FALSE(bad.ok());
   EXPECT_EQ(bad.error().field, "leaf_size");
   EXPECT_FALSE(MeshBvh::build(nullptr).ok());

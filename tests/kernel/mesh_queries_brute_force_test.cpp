@@ -27,8 +27,8 @@ Scenario make_scenario(Rng& rng, int round) {
   const bool soups = round % 2 == 1;
   auto ma = soups ? testing::random_soup(rng, 120, 6.0, 2.0) : testing::random_closed_blob(rng, 2, 6.0, 0.5, Vec3::Zero());
   auto mb = soups ? testing::random_soup(rng, 80, 5.0, 2.5) : testing::random_closed_blob(rng, 2, 5.0, 0.5, Vec3::Zero());
-  s.a = MeshBvh::build(testing::share(std::move(ma)), {1 + 2 * (round % 2), 32}).value();
-  s.b = MeshBvh::build(testing::share(std::move(mb)), {1 + 2 * ((round / 2) % 2), 32}).value();
+  s.a = MeshBvh::build(testing::share(std::move(ma)), {1 + 2 * (round % 2)}).value();
+  s.b = MeshBvh::build(testing::share(std::move(mb)), {1 + 2 * ((round / 2) % 2)}).value();
   s.pose_a = testing::random_pose(rng, 100.0);
   // B near A: within a few mesh radii, so some poses collide and some do not.
   const RigidTransform offset = testing::random_pose(rng, 14.0);
