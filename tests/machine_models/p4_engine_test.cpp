@@ -324,3 +324,36 @@ TEST(P4SurfaceParts, ARealStepSheetMetalPartGoesThroughThePipeline) {
 
 }  // namespace
 }  // namespace gk::p4
+
+namespace gk::p4 {
+namespace {
+
+TEST(P4Scenarios, RetractingWithAFlangeTallerThanTheOpenBlankholderCatchesIt) {
+  const double t = 1.5;
+  Engine e = make_engine(t);
+  // The y_max flange stands 250 mm at the bend line; the blankholder opens 220 mm while the part
+  // moves, its nose 0.5 mm behind the bend line: pulling the part back 100 mm catches the flange
+  // after (0.5 - 0.1) mm of travel.
+  SheetPartSpec spec{1000.0, 800.0, t, {{Side::kYMax, 250.0, 90.0, 0.0, 0.0}}, {}};
+  const SheetPart tall = SheetPart::create(spec).value();
+  BendStep retract = bend(StepKind::kRetract, 800.0, 90.0);
+  retract.travel_mm = Vec3(0.0, -100.0, 0.0);
+  auto a = e.validator->validate(tall, retract);
+  ASSERT_TRUE(a.ok()) << a.error().to_string();
+  ASSERT_EQ(a.value().verdict, Verdict::kCollision) << a.value().reason;
+  EXPECT_EQ(a.value().collisions.front().organ.rfind("aba.segment.", 0), 0u);
+  EXPECT_NEAR(a.value().collisions.front().first_contact_fraction * 100.0, 0.4, 0.01);  // mm of travel
+  // A 150 mm flange passes under the open blankholder; approaching forward is clear too.
+  spec.flanges[0].height_mm = 150.0;
+  const SheetPart low = SheetPart::create(spec).value();
+  EXPECT_EQ(e.validator->validate(low, retract).value().verdict, Verdict::kClear);
+  BendStep approach = retract;
+  approach.kind = StepKind::kApproach;
+  approach.travel_mm = Vec3(0.0, 100.0, 0.0);
+  EXPECT_EQ(e.validator->validate(tall, approach).value().verdict, Verdict::kClear);
+  approach.travel_mm = Vec3::Zero();
+  EXPECT_EQ(e.validator->validate(tall, approach).error().field, "travel_mm");
+}
+
+}  // namespace
+}  // namespace gk::p4
