@@ -1,17 +1,16 @@
 #!/usr/bin/env bash
-# The kernel demo (until the gRPC service lands): installs what is missing, builds, and checks
-# real meshes from ../shared/data against each other with the exact kernel.
+# The main job: installs what is missing, builds, starts gatekeeperd on the embedded default P4
+# machine model, runs the Phase-3 sequencer simulator against it (its table is the demo), and
+# stops the daemon. The daemon listens on a free loopback port chosen at start (its default,
+# without --listen, is 127.0.0.1:50051).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/build.sh > /dev/null
-DATA="$(cd .. && pwd)/shared/data/meshes"
-CHECK=./build/clients/gatekeeper-mesh-check
-run() { echo; echo "\$ gatekeeper-mesh-check $*"; "$CHECK" "$@" || true; }
-# FCL's classic env/rob pair, rob placed inside env's clutter: they collide.
-run "$DATA/fcl/env.obj" "$DATA/fcl/rob.obj" --move 10 20 30
-# The same pair moved 2 m up and turned: clear, with the minimum distance and its witnesses.
-run "$DATA/fcl/env.obj" "$DATA/fcl/rob.obj" --move 0 0 2000 --rotate-deg 0 0 1 30
-# Two closed meshes: the turbine hovering 0.1 mm over the fandisk's top face (clear), then
-# lowered 0.4 mm into it (collision, with the crossing triangle pairs counted).
-run "$DATA/cgal/fandisk_large.off" "$DATA/cgal/turbine.off" --move 2.4 15.2 0.6 --gap 0.05
-run "$DATA/cgal/fandisk_large.off" "$DATA/cgal/turbine.off" --move 2.4 15.2 0.2 --gap 0.05
+bash scripts/build.sh > /tmp/gatekeeper-build.log 2>&1 || { tail -40 /tmp/gatekeeper-build.log; exit 1; }
+DATA=$(mktemp -d)
+./build/server/gatekeeperd --listen 127.0.0.1:0 --data-dir "$DATA" --port-file "$DATA/port" --log-level warn &
+PID=$!
+trap 'kill -TERM $PID 2>/dev/null; wait $PID 2>/dev/null; rm -rf "$DATA"' EXIT
+for _ in $(seq 200); do [ -s "$DATA/port" ] && break; sleep 0.05; done
+[ -s "$DATA/port" ] || { echo "gatekeeperd did not start"; exit 1; }
+cd clients/python
+/usr/bin/python3 -m gatekeeper_client.sequencer_sim --address "127.0.0.1:$(cat "$DATA/port")" "$@"

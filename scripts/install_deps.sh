@@ -16,7 +16,7 @@ PACKAGES=(
   libfcl-dev libgtest-dev libgmock-dev libbenchmark-dev
   # service
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler grpc-proto
-  libspdlog-dev libfmt-dev libsqlite3-dev nlohmann-json3-dev libcli11-dev
+  libspdlog-dev libfmt-dev libsqlite3-dev nlohmann-json3-dev libcli11-dev libssl-dev
   # machine model files
   libtomlplusplus-dev
   # python clients

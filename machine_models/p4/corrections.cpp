@@ -7,26 +7,13 @@
 #include <set>
 
 namespace gk::p4 {
-namespace {
-
-// Runs f with corrections off (a correction is validated without looking for further ones).
-template <typename F>
-auto without_corrections(ValidatorOptions& options, F&& f) {
-  const bool saved = options.compute_corrections;
-  options.compute_corrections = false;
-  auto result = f();
-  options.compute_corrections = saved;
-  return result;
-}
-
-}  // namespace
 
 void StepValidator::add_correction(const SheetPart& part, const BendStep& step, StepAnswer& answer) {
   const MachineModel& model = scene_->model();
   const MachineState original = scene_->state();
   Correction& c = answer.correction;
   auto clear_with = [&](const BendStep& s) {
-    auto r = without_corrections(options_, [&] { return validate(part, s); });
+    auto r = validate(part, s, false);
     return r.ok() && r.value().verdict == Verdict::kClear;
   };
   const std::string& organ = answer.collisions.empty() ? std::string() : answer.collisions.front().organ;
@@ -40,7 +27,7 @@ void StepValidator::add_correction(const SheetPart& part, const BendStep& step, 
     up.kind = StepKind::kBendUp;
     c.kind = CorrectionKind::kFlip;
     c.verified = [&] {
-      auto r = without_corrections(options_, [&] { return validate(flipped, up); });
+      auto r = validate(flipped, up, false);
       return r.ok() && r.value().verdict == Verdict::kClear;
     }();
     c.description = c.verified ? "turn the part over and bend up instead" : "turning the part over does not clear it either";
@@ -100,7 +87,7 @@ void StepValidator::add_correction(const SheetPart& part, const BendStep& step, 
       MachineState trial = original;
       trial.engaged_segments = engaged;
       if (!scene_->apply_state(trial).ok()) break;
-      auto r = without_corrections(options_, [&] { return validate(part, step); });
+      auto r = validate(part, step, false);
       if (!r.ok()) break;
       current = r.value();
     }

@@ -250,6 +250,10 @@ Result<std::shared_ptr<const StepValidator::Prepared>> StepValidator::prepare(co
 }
 
 Result<StepAnswer> StepValidator::validate(const SheetPart& part, const BendStep& step) {
+  return validate(part, step, options_.compute_corrections);
+}
+
+Result<StepAnswer> StepValidator::validate(const SheetPart& part, const BendStep& step, bool with_corrections) {
   const auto t0 = Clock::now();
   auto valid = validate_step(scene_->model(), step);
   if (!valid.ok()) return valid.error();
@@ -257,7 +261,7 @@ Result<StepAnswer> StepValidator::validate(const SheetPart& part, const BendStep
   if (part.thickness_mm() < model.min_thickness_mm || part.thickness_mm() > model.max_thickness_mm)
     return invalid_argument("part.thickness_mm", "outside the machine's range [" + std::to_string(model.min_thickness_mm) +
                                                      ", " + std::to_string(model.max_thickness_mm) + "] mm");
-  const std::uint64_t key = mix(mix(part.content_hash(), step.hash()), scene_->state().hash());
+  const std::uint64_t key = mix(mix(mix(part.content_hash(), step.hash()), scene_->state().hash()), with_corrections ? 1 : 2);
   if (auto it = memo_.find(key); it != memo_.end()) {
     StepAnswer hit = it->second;
     hit.decided_by = Stage::kCache;
@@ -268,7 +272,7 @@ Result<StepAnswer> StepValidator::validate(const SheetPart& part, const BendStep
   auto answer = run_pipeline(part, step);
   if (!answer.ok()) return answer;
   StepAnswer& a = answer.value();
-  if (a.verdict == Verdict::kCollision && options_.compute_corrections) add_correction(part, step, a);
+  if (a.verdict == Verdict::kCollision && with_corrections) add_correction(part, step, a);
   a.times.cache_us = 0.0;
   a.times.total_us = us_since(t0);
   if (memo_.size() >= options_.memo_capacity) memo_.clear();

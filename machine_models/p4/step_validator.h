@@ -81,6 +81,8 @@ class StepValidator {
   const MachineScene& scene() const { return *scene_; }
 
   Result<StepAnswer> validate(const SheetPart& part, const BendStep& step);
+  // The same, choosing per call whether a denied step gets a correction.
+  Result<StepAnswer> validate(const SheetPart& part, const BendStep& step, bool with_corrections);
 
   std::size_t memo_size() const { return memo_.size(); }
   void clear_caches();  // answers and prepared geometry

@@ -1,0 +1,1 @@
+"""Python clients of gatekeeperd (stubs generated from proto/ at build time into build/python)."""

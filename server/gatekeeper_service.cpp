@@ -1,0 +1,288 @@
+#include "server/gatekeeper_service.h"
+
+#include "kernel/contact_verdict.h"
+#include "kernel/mesh_distance.h"
+#include "server/proto_convert.h"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+
+namespace gk::server {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr std::size_t kMaxChunkBytes = 1u << 20;
+
+double us_since(Clock::time_point t0) { return std::chrono::duration<double, std::micro>(Clock::now() - t0).count(); }
+
+bool past_deadline(const grpc::CallbackServerContext* ctx) {
+  return ctx->deadline() < std::chrono::system_clock::now();
+}
+
+// Finishes a unary call, recording its latency and outcome.
+grpc::ServerUnaryReactor* finish(grpc::CallbackServerContext* ctx, RpcStats& stats, const char* method,
+                                 Clock::time_point t0, const grpc::Status& status) {
+  stats.record(method, us_since(t0), !status.ok());
+  auto* reactor = ctx->DefaultReactor();
+  reactor->Finish(status);
+  return reactor;
+}
+
+// Reads an upload: the header, then chunks of at most 1 MiB into the store's temporary file;
+// finishing (hash check, fsync, parsing, record) runs on the work pool.
+class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> {
+ public:
+  UploadReactor(GatekeeperService& service, pb::PartInfo* reply) : service_(service), reply_(reply), t0_(Clock::now()) {
+    StartRead(&chunk_);
+  }
+
+  void OnReadDone(bool ok) override {
+    if (!ok) {  // the client closed its side (or went away): finish what arrived
+      complete();
+      return;
+    }
+    if (!upload_) {
+      if (!chunk_.has_header()) return fail(invalid_argument("header", "the first message must carry the header"));
+      const pb::UploadHeader& h = chunk_.header();
+      auto begun = service_.parts().store().begin(h.name(), h.format(), h.size_bytes(), h.sha256());
+      if (!begun.ok()) return fail(begun.error());
+      upload_ = std::move(begun.value());
+    } else {
+      if (!chunk_.has_data()) return fail(invalid_argument("header", "sent twice"));
+      if (chunk_.data().size() > kMaxChunkBytes) return fail(invalid_argument("data", "chunk larger than 1 MiB"));
+      auto appended = upload_->append(chunk_.data());
+      if (!appended.ok()) return fail(appended.error());
+    }
+    StartRead(&chunk_);
+  }
+
+  void OnDone() override { delete this; }
+
+ private:
+  void fail(const Error& e) {
+    upload_.reset();  // removes the temporary file
+    done(to_status(e));
+  }
+
+  void done(const grpc::Status& status) {
+    service_.stats().record("UploadPart", us_since(t0_), !status.ok());
+    Finish(status);
+  }
+
+  void complete() {
+    if (!upload_) return done({grpc::StatusCode::INVALID_ARGUMENT, "header: no upload header received"});
+    auto* self = this;
+    const bool queued = service_.pool().try_submit([self] {
+      auto record = self->service_.parts().store().finish(
+          std::move(self->upload_), [](const std::string& path, PartRecord r) -> Result<PartRecord> {
+            auto mesh = PartRegistry::read_any(path, r.format, 0.05);
+            if (!mesh.ok()) return mesh.error();
+            r.triangles = static_cast<std::uint32_t>(mesh.value().triangle_count());
+            r.bounds_min = mesh.value().bounds().min;
+            r.bounds_max = mesh.value().bounds().max;
+            r.closed = mesh.value().is_closed_oriented();
+            return r;
+          });
+      if (!record.ok()) return self->done(to_status(record.error()));
+      to_proto(record.value(), self->reply_);
+      spdlog::info("stored part {} ({} bytes, {} triangles)", record.value().id, record.value().size_bytes,
+                   record.value().triangles);
+      self->done(grpc::Status::OK);
+    });
+    if (!queued) done({grpc::StatusCode::RESOURCE_EXHAUSTED, "work queue full: retry later"});
+  }
+
+  GatekeeperService& service_;
+  pb::PartInfo* reply_;
+  Clock::time_point t0_;
+  pb::UploadPartChunk chunk_;
+  std::unique_ptr<PartUpload> upload_;
+};
+
+}  // namespace
+
+GatekeeperService::GatekeeperService(MachineRegistry& machines, PartRegistry& parts, ServiceOptions options)
+    : machines_(machines), parts_(parts), options_(options), pool_(options.workers, options.max_queued) {}
+
+GatekeeperService::~GatekeeperService() { pool_.stop(); }
+
+grpc::Status GatekeeperService::validate_one(const pb::ValidateStepRequest& request, const pb::SheetPart* default_part,
+                                             const std::string& default_machine, pb::ValidateStepResponse* response) {
+  const std::string machine = request.machine_id().empty() ? default_machine : request.machine_id();
+  auto snapshot = machines_.get(machine);
+  if (!snapshot.ok()) return to_status(snapshot.error());
+  const pb::SheetPart& part_msg = request.has_part() || !default_part ? request.part() : *default_part;
+  auto part = to_part(part_msg, parts_);
+  if (!part.ok()) return to_status(part.error());
+  auto step = to_step(request.step());
+  if (!step.ok()) return to_status(step.error());
+  p4::MachineState state;
+  const p4::MachineState* state_ptr = nullptr;
+  if (request.has_state()) {
+    auto s = to_state(request.state(), snapshot.value().model);
+    if (!s.ok()) return to_status(s.error());
+    state = s.value();
+    state_ptr = &state;
+  }
+  auto validator = machines_.validator(machine, state_ptr);
+  if (!validator.ok()) return to_status(validator.error());
+  auto answer = validator.value()->validate(part.value(), step.value(), !request.skip_corrections());
+  if (!answer.ok()) return to_status(answer.error());
+  to_proto(answer.value(), response);
+  return grpc::Status::OK;
+}
+
+grpc::ServerUnaryReactor* GatekeeperService::ValidateStep(grpc::CallbackServerContext* ctx,
+                                                          const pb::ValidateStepRequest* request,
+                                                          pb::ValidateStepResponse* response) {
+  const auto t0 = Clock::now();
+  if (past_deadline(ctx)) return finish(ctx, stats_, "ValidateStep", t0, {grpc::StatusCode::DEADLINE_EXCEEDED, "deadline passed"});
+  return finish(ctx, stats_, "ValidateStep", t0, validate_one(*request, nullptr, "", response));
+}
+
+grpc::ServerUnaryReactor* GatekeeperService::ValidateSteps(grpc::CallbackServerContext* ctx,
+                                                           const pb::ValidateStepsRequest* request,
+                                                           pb::ValidateStepsResponse* response) {
+  const auto t0 = Clock::now();
+  response->set_first_failure(-1);
+  for (int i = 0; i < request->steps_size(); ++i) {
+    if (past_deadline(ctx) || ctx->IsCancelled())
+      return finish(ctx, stats_, "ValidateSteps", t0, {grpc::StatusCode::DEADLINE_EXCEEDED, "deadline passed after step " + std::to_string(i)});
+    pb::ValidateStepResponse* one = response->add_results();
+    grpc::Status s = validate_one(request->steps(i), request->has_part() ? &request->part() : nullptr, request->machine_id(), one);
+    if (!s.ok())
+      return finish(ctx, stats_, "ValidateSteps", t0, {s.error_code(), "steps[" + std::to_string(i) + "]." + s.error_message()});
+    if (one->verdict() != pb::CLEAR && response->first_failure() < 0) {
+      response->set_first_failure(i);
+      if (request->stop_at_first_failure()) break;
+    }
+  }
+  return finish(ctx, stats_, "ValidateSteps", t0, grpc::Status::OK);
+}
+
+grpc::Status GatekeeperService::clearance(const pb::ClearanceQueryRequest& request, pb::ClearanceQueryResponse* response) {
+  const auto t0 = Clock::now();
+  if (!std::isfinite(request.safety_gap_mm()) || request.safety_gap_mm() < 0.0)
+    return {grpc::StatusCode::INVALID_ARGUMENT, "safety_gap_mm: must be a finite, non-negative distance"};
+  auto a = parts_.load(request.a().part_id(), 0.05);
+  if (!a.ok()) return to_status(Error{a.error().code, "a.part_id", a.error().message});
+  auto b = parts_.load(request.b().part_id(), 0.05);
+  if (!b.ok()) return to_status(Error{b.error().code, "b.part_id", b.error().message});
+  auto pa = to_pose(request.a().pose(), "a.pose");
+  if (!pa.ok()) return to_status(pa.error());
+  auto pb_ = to_pose(request.b().pose(), "b.pose");
+  if (!pb_.ok()) return to_status(pb_.error());
+  auto verdict = assess(*a.value()->bvh, pa.value(), *b.value()->bvh, pb_.value());
+  if (!verdict.ok()) return to_status(verdict.error());
+  const VerdictResult& v = verdict.value();
+  response->set_verdict(to_proto(v.verdict));
+  response->set_reason(v.reason);
+  response->set_distance_mm(v.distance_mm);
+  to_proto(v.point_a, response->mutable_point_a());
+  to_proto(v.point_b, response->mutable_point_b());
+  if (!v.contacts.empty()) {
+    response->set_triangle_a(v.contacts.front().triangle_a);
+    response->set_triangle_b(v.contacts.front().triangle_b);
+  }
+  auto near = pairs_within(*a.value()->bvh, pa.value(), *b.value()->bvh, pb_.value(), request.safety_gap_mm());
+  if (!near.ok()) return to_status(near.error());
+  response->set_pairs_within_gap(static_cast<std::uint32_t>(near.value().pairs.size()));
+  response->set_gap_violated(v.distance_mm < request.safety_gap_mm() || v.verdict != Verdict::kClear);
+  response->set_elapsed_us(us_since(t0));
+  return grpc::Status::OK;
+}
+
+grpc::ServerUnaryReactor* GatekeeperService::ClearanceQuery(grpc::CallbackServerContext* ctx,
+                                                            const pb::ClearanceQueryRequest* request,
+                                                            pb::ClearanceQueryResponse* response) {
+  const auto t0 = Clock::now();
+  auto* reactor = ctx->DefaultReactor();
+  const bool queued = pool_.try_submit([this, ctx, request, response, reactor, t0] {
+    grpc::Status status;
+    if (ctx->IsCancelled()) status = {grpc::StatusCode::CANCELLED, "cancelled by the client"};
+    else if (past_deadline(ctx)) status = {grpc::StatusCode::DEADLINE_EXCEEDED, "deadline passed while queued"};
+    else status = clearance(*request, response);
+    stats_.record("ClearanceQuery", us_since(t0), !status.ok());
+    reactor->Finish(status);
+  });
+  if (!queued) {
+    stats_.record("ClearanceQuery", us_since(t0), true);
+    reactor->Finish({grpc::StatusCode::RESOURCE_EXHAUSTED, "clearance queue full: retry later"});
+  }
+  return reactor;
+}
+
+grpc::ServerReadReactor<pb::UploadPartChunk>* GatekeeperService::UploadPart(grpc::CallbackServerContext*,
+                                                                           pb::PartInfo* response) {
+  return new UploadReactor(*this, response);
+}
+
+grpc::ServerUnaryReactor* GatekeeperService::GetPartInfo(grpc::CallbackServerContext* ctx, const pb::GetPartInfoRequest* request,
+                                                         pb::PartInfo* response) {
+  const auto t0 = Clock::now();
+  auto record = parts_.store().get(request->part_id());
+  if (!record.ok()) return finish(ctx, stats_, "GetPartInfo", t0, to_status(record.error()));
+  to_proto(record.value(), response);
+  return finish(ctx, stats_, "GetPartInfo", t0, grpc::Status::OK);
+}
+
+grpc::Status GatekeeperService::machine_info(const std::string& id, pb::MachineInfo* response) {
+  auto m = machines_.get(id);
+  if (!m.ok()) return to_status(m.error());
+  response->set_machine_id(m.value().id);
+  response->set_name(m.value().model.name);
+  response->set_aba_segments(static_cast<std::uint32_t>(m.value().model.aba.segment_widths_mm.size()));
+  response->set_max_bend_length_mm(m.value().model.max_bend_length_mm);
+  response->set_max_bend_angle_deg(m.value().model.max_bend_angle_deg);
+  to_proto(m.value().state, response->mutable_state());
+  response->set_model_toml(m.value().model_toml);
+  return grpc::Status::OK;
+}
+
+grpc::ServerUnaryReactor* GatekeeperService::ListMachines(grpc::CallbackServerContext* ctx, const pb::ListMachinesRequest*,
+                                                          pb::ListMachinesResponse* response) {
+  const auto t0 = Clock::now();
+  for (const MachineSnapshot& m : machines_.list()) {
+    grpc::Status s = machine_info(m.id, response->add_machines());
+    if (!s.ok()) return finish(ctx, stats_, "ListMachines", t0, s);
+  }
+  return finish(ctx, stats_, "ListMachines", t0, grpc::Status::OK);
+}
+
+grpc::ServerUnaryReactor* GatekeeperService::GetMachine(grpc::CallbackServerContext* ctx, const pb::GetMachineRequest* request,
+                                                        pb::MachineInfo* response) {
+  const auto t0 = Clock::now();
+  return finish(ctx, stats_, "GetMachine", t0, machine_info(request->machine_id(), response));
+}
+
+grpc::ServerUnaryReactor* GatekeeperService::SetMachineState(grpc::CallbackServerContext* ctx,
+                                                             const pb::SetMachineStateRequest* request, pb::MachineInfo* response) {
+  const auto t0 = Clock::now();
+  auto m = machines_.get(request->machine_id());
+  if (!m.ok()) return finish(ctx, stats_, "SetMachineState", t0, to_status(m.error()));
+  auto state = to_state(request->state(), m.value().model);
+  if (!state.ok()) return finish(ctx, stats_, "SetMachineState", t0, to_status(state.error()));
+  auto set = machines_.set_state(request->machine_id(), state.value());
+  if (!set.ok()) return finish(ctx, stats_, "SetMachineState", t0, to_status(set.error()));
+  return finish(ctx, stats_, "SetMachineState", t0, machine_info(request->machine_id(), response));
+}
+
+grpc::ServerUnaryReactor* GatekeeperService::GetServerInfo(grpc::CallbackServerContext* ctx, const pb::GetServerInfoRequest*,
+                                                           pb::ServerInfo* response) {
+  const auto t0 = Clock::now();
+  response->set_version(options_.version);
+  for (const MachineSnapshot& m : machines_.list()) response->add_machines(m.id);
+  for (const RpcStats::Summary& s : stats_.summaries()) {
+    pb::RpcStats* r = response->add_rpcs();
+    r->set_method(s.method);
+    r->set_calls(s.calls);
+    r->set_errors(s.errors);
+    r->set_p50_us(s.p50_us);
+    r->set_p99_us(s.p99_us);
+  }
+  response->set_parts_stored(parts_.store().count());
+  return finish(ctx, stats_, "GetServerInfo", t0, grpc::Status::OK);
+}
+
+}  // namespace gk::server

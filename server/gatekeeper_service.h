@@ -1,0 +1,66 @@
+// The gRPC service: a thin adapter from gatekeeper.v1 to the engine, the kernel and the stores.
+// Callback API; ValidateStep is answered on the callback thread (microseconds, no blocking);
+// clearance queries and upload finishing run on a bounded work pool.
+#pragma once
+
+#include "gatekeeper/v1/gatekeeper.grpc.pb.h"
+#include "server/machine_registry.h"
+#include "server/part_registry.h"
+#include "server/rpc_stats.h"
+#include "server/work_pool.h"
+
+#include <memory>
+#include <string>
+
+namespace gk::server {
+
+namespace pb = ::gatekeeper::v1;
+
+struct ServiceOptions {
+  int workers = 2;                 // clearance and upload-finishing threads
+  std::size_t max_queued = 64;     // beyond this, RESOURCE_EXHAUSTED
+  std::string version = "0.1.0";
+};
+
+class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackService {
+ public:
+  GatekeeperService(MachineRegistry& machines, PartRegistry& parts, ServiceOptions options);
+  ~GatekeeperService() override;
+
+  void stop_work() { pool_.stop(); }
+  RpcStats& stats() { return stats_; }
+  PartRegistry& parts() { return parts_; }
+  WorkPool& pool() { return pool_; }
+
+  grpc::ServerUnaryReactor* ValidateStep(grpc::CallbackServerContext* ctx, const pb::ValidateStepRequest* request,
+                                         pb::ValidateStepResponse* response) override;
+  grpc::ServerUnaryReactor* ValidateSteps(grpc::CallbackServerContext* ctx, const pb::ValidateStepsRequest* request,
+                                          pb::ValidateStepsResponse* response) override;
+  grpc::ServerUnaryReactor* ClearanceQuery(grpc::CallbackServerContext* ctx, const pb::ClearanceQueryRequest* request,
+                                           pb::ClearanceQueryResponse* response) override;
+  grpc::ServerReadReactor<pb::UploadPartChunk>* UploadPart(grpc::CallbackServerContext* ctx, pb::PartInfo* response) override;
+  grpc::ServerUnaryReactor* GetPartInfo(grpc::CallbackServerContext* ctx, const pb::GetPartInfoRequest* request,
+                                        pb::PartInfo* response) override;
+  grpc::ServerUnaryReactor* ListMachines(grpc::CallbackServerContext* ctx, const pb::ListMachinesRequest* request,
+                                         pb::ListMachinesResponse* response) override;
+  grpc::ServerUnaryReactor* GetMachine(grpc::CallbackServerContext* ctx, const pb::GetMachineRequest* request,
+                                       pb::MachineInfo* response) override;
+  grpc::ServerUnaryReactor* SetMachineState(grpc::CallbackServerContext* ctx, const pb::SetMachineStateRequest* request,
+                                            pb::MachineInfo* response) override;
+  grpc::ServerUnaryReactor* GetServerInfo(grpc::CallbackServerContext* ctx, const pb::GetServerInfoRequest* request,
+                                          pb::ServerInfo* response) override;
+
+ private:
+  grpc::Status validate_one(const pb::ValidateStepRequest& request, const pb::SheetPart* default_part,
+                            const std::string& default_machine, pb::ValidateStepResponse* response);
+  grpc::Status clearance(const pb::ClearanceQueryRequest& request, pb::ClearanceQueryResponse* response);
+  grpc::Status machine_info(const std::string& id, pb::MachineInfo* response);
+
+  MachineRegistry& machines_;
+  PartRegistry& parts_;
+  ServiceOptions options_;
+  RpcStats stats_;
+  WorkPool pool_;
+};
+
+}  // namespace gk::server

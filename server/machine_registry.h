@@ -1,0 +1,48 @@
+// The machines the daemon serves: their models and current states, and for each calling thread
+// its own validator (validators are not thread-safe; scenes are cheap to build per thread).
+#pragma once
+
+#include "machine_models/p4/step_validator.h"
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace gk::server {
+
+struct MachineSnapshot {
+  std::string id;
+  p4::MachineModel model;
+  std::string model_toml;
+  p4::MachineState state;
+};
+
+class MachineRegistry {
+ public:
+  static constexpr const char* kDefaultMachine = "p4-default";
+
+  // Starts with the embedded default P4 model as "p4-default".
+  static Result<std::unique_ptr<MachineRegistry>> create();
+
+  std::vector<MachineSnapshot> list() const;
+  Result<MachineSnapshot> get(const std::string& id) const;  // "" means the default
+  Result<bool> set_state(const std::string& id, const p4::MachineState& state);
+
+  // The calling thread's validator for the machine, set to `state` (or the machine's current state).
+  Result<p4::StepValidator*> validator(const std::string& id, const p4::MachineState* state);
+
+ private:
+  struct Machine {
+    MachineSnapshot snapshot;
+  };
+  MachineRegistry() = default;
+  std::string resolve(const std::string& id) const { return id.empty() ? kDefaultMachine : id; }
+
+  mutable std::mutex mutex_;
+  std::map<std::string, Machine> machines_;
+};
+
+}  // namespace gk::server

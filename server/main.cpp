@@ -1,0 +1,116 @@
+// gatekeeperd: the physics gatekeeper's gRPC daemon.
+//
+//   gatekeeperd [--listen 127.0.0.1:50051] [--data-dir DIR] [--config FILE.toml] [--workers N]
+//               [--queue N] [--port-file FILE] [--log-level info]
+//
+// Starts with the embedded default P4 machine model; health (grpc.health.v1) and reflection
+// (v1alpha) are served; SIGTERM or SIGINT shut it down gracefully (health NOT_SERVING, in-flight
+// calls finish within 5 s, workers join, storage closes).
+#include "server/gatekeeper_service.h"
+
+#include <CLI/CLI.hpp>
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/grpcpp.h>
+#include <grpcpp/health_check_service_interface.h>
+#include <spdlog/spdlog.h>
+#include <toml++/toml.h>
+
+#include <csignal>
+#include <fstream>
+#include <pthread.h>
+
+namespace {
+
+struct Config {
+  std::string listen = "127.0.0.1:50051";
+  std::string data_dir = "gatekeeper-data";
+  std::string port_file;
+  std::string log_level = "info";
+  int workers = 2;
+  int queue = 64;
+};
+
+// Values from a TOML config file; flags given on the command line win.
+bool apply_config_file(const std::string& path, Config& c, const CLI::App& app) {
+  try {
+    const toml::table t = toml::parse_file(path);
+    if (app.count("--listen") == 0) c.listen = t["listen"].value_or(c.listen);
+    if (app.count("--data-dir") == 0) c.data_dir = t["data_dir"].value_or(c.data_dir);
+    if (app.count("--workers") == 0) c.workers = t["workers"].value_or(c.workers);
+    if (app.count("--queue") == 0) c.queue = t["queue"].value_or(c.queue);
+    if (app.count("--log-level") == 0) c.log_level = t["log_level"].value_or(c.log_level);
+    return true;
+  } catch (const toml::parse_error& e) {
+    spdlog::error("config {}: {}", path, std::string(e.description()));
+    return false;
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Config config;
+  std::string config_file;
+  CLI::App app{"gatekeeperd: decides, before a machine moves, whether the move is physically possible"};
+  app.add_option("--listen", config.listen, "address:port to listen on (port 0: any free port)");
+  app.add_option("--data-dir", config.data_dir, "where uploaded parts and their records are stored");
+  app.add_option("--config", config_file, "a TOML file with listen, data_dir, workers, queue, log_level");
+  app.add_option("--workers", config.workers, "threads for clearance queries and upload finishing")->check(CLI::Range(1, 64));
+  app.add_option("--queue", config.queue, "queued jobs beyond which requests get RESOURCE_EXHAUSTED")->check(CLI::Range(1, 100000));
+  app.add_option("--port-file", config.port_file, "write the bound port to this file once serving");
+  app.add_option("--log-level", config.log_level, "trace, debug, info, warn, error");
+  CLI11_PARSE(app, argc, argv);
+  if (!config_file.empty() && !apply_config_file(config_file, config, app)) return 2;
+  spdlog::set_level(spdlog::level::from_str(config.log_level));
+
+  // Block the shutdown signals in every thread; the main thread waits for them below.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  auto store = gk::server::PartStore::open(config.data_dir);
+  if (!store.ok()) {
+    spdlog::error("{}", store.error().to_string());
+    return 1;
+  }
+  gk::server::PartRegistry parts(*store.value());
+  auto machines = gk::server::MachineRegistry::create();
+  if (!machines.ok()) {
+    spdlog::error("default machine model: {}", machines.error().to_string());
+    return 1;
+  }
+  gk::server::ServiceOptions options;
+  options.workers = config.workers;
+  options.max_queued = static_cast<std::size_t>(config.queue);
+  gk::server::GatekeeperService service(*machines.value(), parts, options);
+
+  grpc::EnableDefaultHealthCheckService(true);
+  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+  grpc::ServerBuilder builder;
+  int port = 0;
+  builder.AddListeningPort(config.listen, grpc::InsecureServerCredentials(), &port);
+  builder.RegisterService(&service);
+  std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
+  if (!server || port == 0) {
+    spdlog::error("cannot listen on {}", config.listen);
+    return 1;
+  }
+  server->GetHealthCheckService()->SetServingStatus(true);
+  spdlog::info("gatekeeperd serving on port {} (data in {}, machine {})", port, config.data_dir,
+               gk::server::MachineRegistry::kDefaultMachine);
+  if (!config.port_file.empty()) {
+    std::ofstream(config.port_file + ".tmp") << port << "\n";
+    std::rename((config.port_file + ".tmp").c_str(), config.port_file.c_str());
+  }
+
+  int received = 0;
+  sigwait(&signals, &received);
+  spdlog::info("signal {}: draining", received);
+  server->GetHealthCheckService()->SetServingStatus(false);
+  server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(5));
+  service.stop_work();
+  spdlog::info("stopped");
+  return 0;
+}

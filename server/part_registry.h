@@ -1,0 +1,39 @@
+// Uploaded parts as meshes, loaded from the store on first use and kept in memory.
+#pragma once
+
+#include "kernel/mesh_bvh.h"
+#include "server/part_store.h"
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <utility>
+
+namespace gk::server {
+
+struct LoadedPart {
+  PartRecord record;
+  std::shared_ptr<const TriangleMesh> mesh;
+  std::shared_ptr<MeshBvh> bvh;
+  double deflection_mm = 0.0;  // CAD parts: the tessellation's deflection; meshes: 0
+};
+
+class PartRegistry {
+ public:
+  explicit PartRegistry(PartStore& store) : store_(store) {}
+
+  // The part's mesh: mesh formats as stored, CAD formats tessellated at deflection_mm.
+  Result<std::shared_ptr<const LoadedPart>> load(const std::string& id, double deflection_mm);
+
+  // Reads any supported file into a mesh (used to describe an upload before it is recorded).
+  static Result<TriangleMesh> read_any(const std::string& path, const std::string& format, double deflection_mm);
+
+  PartStore& store() { return store_; }
+
+ private:
+  PartStore& store_;
+  std::mutex mutex_;
+  std::map<std::pair<std::string, double>, std::shared_ptr<const LoadedPart>> loaded_;
+};
+
+}  // namespace gk::server

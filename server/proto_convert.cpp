@@ -1,0 +1,182 @@
+#include "server/proto_convert.h"
+
+#include <cmath>
+
+namespace gk::server {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+Result<bool> finite(double v, const std::string& field) {
+  if (!std::isfinite(v)) return invalid_argument(field, "must be a finite number");
+  return true;
+}
+
+}  // namespace
+
+grpc::Status to_status(const Error& error) {
+  const std::string message = error.to_string();
+  switch (error.code) {
+    case ErrorCode::kInvalidArgument: return {grpc::StatusCode::INVALID_ARGUMENT, message};
+    case ErrorCode::kNotFound: return {grpc::StatusCode::NOT_FOUND, message};
+    case ErrorCode::kFailedPrecondition: return {grpc::StatusCode::FAILED_PRECONDITION, message};
+    case ErrorCode::kInternal: return {grpc::StatusCode::INTERNAL, message};
+  }
+  return {grpc::StatusCode::INTERNAL, message};
+}
+
+Result<p4::BendStep> to_step(const pb::Step& in) {
+  p4::BendStep s;
+  switch (in.kind()) {
+    case pb::CLAMP: s.kind = p4::StepKind::kClamp; break;
+    case pb::BEND_UP: s.kind = p4::StepKind::kBendUp; break;
+    case pb::BEND_DOWN: s.kind = p4::StepKind::kBendDown; break;
+    case pb::ROTATE: s.kind = p4::StepKind::kRotate; break;
+    case pb::APPROACH: s.kind = p4::StepKind::kApproach; break;
+    case pb::RETRACT: s.kind = p4::StepKind::kRetract; break;
+    default: return invalid_argument("step.kind", "missing or unknown step kind");
+  }
+  s.bend_point_mm = Vec2(in.bend_point().x_mm(), in.bend_point().y_mm());
+  s.bend_direction = in.has_bend_direction() ? Vec2(in.bend_direction().x_mm(), in.bend_direction().y_mm()) : Vec2::UnitX();
+  s.target_angle_deg = in.target_angle_deg();
+  s.rotate_angle_deg = in.rotate_angle_deg();
+  s.travel_mm = Vec3(in.travel().x_mm(), in.travel().y_mm(), in.travel().z_mm());
+  s.lateral_shift_mm = in.lateral_shift_mm();
+  s.retract_mm = in.retract_mm();
+  for (auto [v, f] : {std::pair{s.target_angle_deg, "step.target_angle_deg"}, std::pair{s.rotate_angle_deg, "step.rotate_angle_deg"},
+                      std::pair{s.lateral_shift_mm, "step.lateral_shift_mm"}, std::pair{s.retract_mm, "step.retract_mm"}}) {
+    auto ok = finite(v, f);
+    if (!ok.ok()) return ok.error();
+  }
+  return s;
+}
+
+Result<p4::MachineState> to_state(const pb::MachineState& in, const p4::MachineModel& model) {
+  p4::MachineState s;
+  s.engaged_segments.assign(in.engaged_segments().begin(), in.engaged_segments().end());
+  s.clamp_z_mm = in.clamp_z_mm();
+  s.manipulator_x_mm = in.manipulator_x_mm();
+  s.manipulator_y_mm = in.manipulator_y_mm();
+  s.manipulator_rotation_deg = in.manipulator_rotation_deg();
+  s.lower_blade_z_offset_mm = in.lower_blade_z_offset_mm();
+  auto valid = p4::validate_state(model, s);
+  if (!valid.ok()) return invalid_argument("state." + valid.error().field, valid.error().message);
+  return s;
+}
+
+Result<p4::SheetPart> to_part(const pb::SheetPart& in, PartRegistry& parts) {
+  if (!in.part_id().empty()) {
+    const double deflection = in.deflection_mm() > 0.0 ? in.deflection_mm() : 0.05;
+    auto loaded = parts.load(in.part_id(), deflection);
+    if (!loaded.ok()) return Error{loaded.error().code, "part.part_id", loaded.error().message};
+    auto part = p4::SheetPart::from_surface(*loaded.value()->mesh, in.thickness_mm(), loaded.value()->deflection_mm);
+    if (!part.ok()) return invalid_argument("part." + part.error().field, part.error().message);
+    return part;
+  }
+  p4::SheetPartSpec spec{in.width_mm(), in.depth_mm(), in.thickness_mm(), {}, {}};
+  for (const pb::Flange& f : in.flanges()) {
+    p4::Side side;
+    switch (f.side()) {
+      case pb::X_MIN: side = p4::Side::kXMin; break;
+      case pb::X_MAX: side = p4::Side::kXMax; break;
+      case pb::Y_MIN: side = p4::Side::kYMin; break;
+      case pb::Y_MAX: side = p4::Side::kYMax; break;
+      default: return invalid_argument("part.flanges.side", "missing or unknown side");
+    }
+    spec.flanges.push_back({side, f.height_mm(), f.angle_deg(), f.start_mm(), f.length_mm()});
+  }
+  for (const pb::Tab& t : in.tabs()) spec.tabs.push_back({t.x_min_mm(), t.x_max_mm(), t.y_mm(), t.height_mm()});
+  auto part = p4::SheetPart::create(spec);
+  if (!part.ok()) return invalid_argument("part." + part.error().field, part.error().message);
+  return part;
+}
+
+Result<RigidTransform> to_pose(const pb::Pose& in, const std::string& field) {
+  const Vec3 t(in.translation().x_mm(), in.translation().y_mm(), in.translation().z_mm());
+  const Vec3 axis(in.rotation_axis().x_mm(), in.rotation_axis().y_mm(), in.rotation_axis().z_mm());
+  if (!t.allFinite()) return invalid_argument(field + ".translation", "must be finite");
+  if (!std::isfinite(in.rotation_deg())) return invalid_argument(field + ".rotation_deg", "must be finite");
+  if (in.rotation_deg() == 0.0) return RigidTransform::from_translation(t);
+  if (!axis.allFinite() || !(axis.norm() > 0.0)) return invalid_argument(field + ".rotation_axis", "must be a non-zero vector");
+  return RigidTransform::from_axis_angle(axis, in.rotation_deg() * kPi / 180.0, t);
+}
+
+pb::Verdict to_proto(Verdict v) {
+  switch (v) {
+    case Verdict::kClear: return pb::CLEAR;
+    case Verdict::kTouching: return pb::TOUCHING;
+    case Verdict::kCollision: return pb::COLLISION;
+    case Verdict::kInconclusive: return pb::INCONCLUSIVE;
+  }
+  return pb::INCONCLUSIVE;
+}
+
+void to_proto(const Vec3& v, pb::Vec3* out) {
+  out->set_x_mm(v.x());
+  out->set_y_mm(v.y());
+  out->set_z_mm(v.z());
+}
+
+void to_proto(const p4::MachineState& s, pb::MachineState* out) {
+  out->clear_engaged_segments();
+  for (bool e : s.engaged_segments) out->add_engaged_segments(e);
+  out->set_clamp_z_mm(s.clamp_z_mm);
+  out->set_manipulator_x_mm(s.manipulator_x_mm);
+  out->set_manipulator_y_mm(s.manipulator_y_mm);
+  out->set_manipulator_rotation_deg(s.manipulator_rotation_deg);
+  out->set_lower_blade_z_offset_mm(s.lower_blade_z_offset_mm);
+}
+
+void to_proto(const PartRecord& r, pb::PartInfo* out) {
+  out->set_part_id(r.id);
+  out->set_name(r.name);
+  out->set_format(r.format);
+  out->set_size_bytes(r.size_bytes);
+  out->set_triangles(r.triangles);
+  to_proto(r.bounds_min, out->mutable_bounds_min());
+  to_proto(r.bounds_max, out->mutable_bounds_max());
+  out->set_closed(r.closed);
+}
+
+void to_proto(const p4::StepAnswer& a, pb::ValidateStepResponse* out) {
+  out->set_verdict(to_proto(a.verdict));
+  out->set_reason(a.reason);
+  out->set_decided_by(p4::to_string(a.decided_by));
+  for (const p4::StepCollision& c : a.collisions) {
+    pb::Collision* col = out->add_collisions();
+    col->set_organ(c.organ);
+    to_proto(c.point_mm, col->mutable_point());
+    to_proto(c.organ_point_mm, col->mutable_organ_point());
+    to_proto(c.normal, col->mutable_normal());
+    col->set_depth_mm(c.depth_mm);
+    col->set_first_contact_deg(c.first_contact_deg);
+    col->set_first_contact_fraction(c.first_contact_fraction);
+  }
+  out->set_min_clearance_mm(a.min_clearance_mm);
+  out->set_clearance_organ(a.clearance_organ);
+  to_proto(a.clearance_point_mm, out->mutable_clearance_point());
+  pb::Correction* c = out->mutable_correction();
+  switch (a.correction.kind) {
+    case p4::CorrectionKind::kNone: c->set_kind(pb::CORRECTION_NONE); break;
+    case p4::CorrectionKind::kRepoShift: c->set_kind(pb::REPO); break;
+    case p4::CorrectionKind::kChangeAba: c->set_kind(pb::CHANGE_ABA); break;
+    case p4::CorrectionKind::kRetract: c->set_kind(pb::RETRACT_FIRST); break;
+    case p4::CorrectionKind::kFlip: c->set_kind(pb::FLIP); break;
+  }
+  c->set_lateral_shift_mm(a.correction.lateral_shift_mm);
+  c->set_retract_mm(a.correction.retract_mm);
+  for (bool e : a.correction.engaged_segments) c->add_engaged_segments(e);
+  c->set_verified(a.correction.verified);
+  c->set_description(a.correction.description);
+  pb::StageTimes* t = out->mutable_times();
+  t->set_cache_us(a.times.cache_us);
+  t->set_prepare_us(a.times.prepare_us);
+  t->set_global_box_us(a.times.global_box_us);
+  t->set_broad_us(a.times.broad_us);
+  t->set_hull_us(a.times.hull_us);
+  t->set_narrow_us(a.times.narrow_us);
+  t->set_exact_us(a.times.exact_us);
+  t->set_total_us(a.times.total_us);
+}
+
+}  // namespace gk::server

@@ -1,0 +1,29 @@
+// Between the wire (gatekeeper.v1) and the engine: every malformed field becomes an
+// INVALID_ARGUMENT that names it.
+#pragma once
+
+#include "gatekeeper/v1/gatekeeper.pb.h"
+#include "kernel/contact_verdict.h"
+#include "machine_models/p4/step_validator.h"
+#include "server/part_registry.h"
+
+#include <grpcpp/support/status.h>
+
+namespace gk::server {
+
+namespace pb = ::gatekeeper::v1;
+
+grpc::Status to_status(const Error& error);
+
+Result<p4::BendStep> to_step(const pb::Step& step);
+Result<p4::MachineState> to_state(const pb::MachineState& state, const p4::MachineModel& model);
+Result<p4::SheetPart> to_part(const pb::SheetPart& part, PartRegistry& parts);
+Result<RigidTransform> to_pose(const pb::Pose& pose, const std::string& field);
+
+void to_proto(const p4::StepAnswer& answer, pb::ValidateStepResponse* out);
+void to_proto(const p4::MachineState& state, pb::MachineState* out);
+void to_proto(const Vec3& v, pb::Vec3* out);
+void to_proto(const PartRecord& record, pb::PartInfo* out);
+pb::Verdict to_proto(Verdict v);
+
+}  // namespace gk::server
