@@ -5,7 +5,7 @@
 //
 // Starts with the embedded default P4 machine model; health (grpc.health.v1) and reflection
 // (v1alpha) are served; SIGTERM or SIGINT shut it down gracefully (health NOT_SERVING, in-flight
-// calls finish within 5 s, workers join, storage closes).
+// calls get --drain-seconds to finish, workers join, storage closes).
 #include "server/gatekeeper_service.h"
 
 #include <CLI/CLI.hpp>
@@ -28,6 +28,7 @@ struct Config {
   std::string log_level = "info";
   int workers = 2;
   int queue = 64;
+  int drain_seconds = 5;
 };
 
 // Values from a TOML config file; flags given on the command line win.
@@ -58,6 +59,8 @@ int main(int argc, char** argv) {
   app.add_option("--workers", config.workers, "threads for clearance queries and upload finishing")->check(CLI::Range(1, 64));
   app.add_option("--queue", config.queue, "queued jobs beyond which requests get RESOURCE_EXHAUSTED")->check(CLI::Range(1, 100000));
   app.add_option("--port-file", config.port_file, "write the bound port to this file once serving");
+  app.add_option("--drain-seconds", config.drain_seconds, "on SIGTERM, how long in-flight calls may finish")
+      ->check(CLI::Range(0, 600));
   app.add_option("--log-level", config.log_level, "trace, debug, info, warn, error");
   CLI11_PARSE(app, argc, argv);
   if (!config_file.empty() && !apply_config_file(config_file, config, app)) return 2;
@@ -109,7 +112,7 @@ int main(int argc, char** argv) {
   sigwait(&signals, &received);
   spdlog::info("signal {}: draining", received);
   server->GetHealthCheckService()->SetServingStatus(false);
-  server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(5));
+  server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(config.drain_seconds));
   service.stop_work();
   spdlog::info("stopped");
   return 0;

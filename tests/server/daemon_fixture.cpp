@@ -1,0 +1,92 @@
+#include "tests/server/daemon_fixture.h"
+
+#include <gtest/gtest.h>
+#include <openssl/evp.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+namespace gk::testing {
+
+std::string temp_dir(const std::string& tag) {
+  static int counter = 0;
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("gk-e2e-" + tag + "-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir.string();
+}
+
+std::string sha256_hex(const std::string& bytes) {
+  unsigned char out[EVP_MAX_MD_SIZE];
+  unsigned int n = 0;
+  EVP_Digest(bytes.data(), bytes.size(), out, &n, EVP_sha256(), nullptr);
+  static const char* digits = "0123456789abcdef";
+  std::string hex;
+  for (unsigned int i = 0; i < n; ++i) {
+    hex += digits[out[i] >> 4];
+    hex += digits[out[i] & 15];
+  }
+  return hex;
+}
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+Daemon::Daemon(const std::string& data_dir, std::vector<std::string> extra_args) {
+  const std::string port_file = data_dir + "/port";
+  std::filesystem::remove(port_file);
+  std::vector<std::string> args = {GATEKEEPERD_PATH, "--listen", "127.0.0.1:0", "--data-dir", data_dir,
+                                   "--port-file", port_file, "--log-level", "warn", "--drain-seconds", "1"};
+  args.insert(args.end(), extra_args.begin(), extra_args.end());
+  pid_ = ::fork();
+  if (pid_ == 0) {
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  for (int i = 0; i < 400 && port_ == 0; ++i) {
+    std::ifstream in(port_file);
+    if (!(in >> port_)) {
+      port_ = 0;
+      std::this_thread::sleep_for(std::chrono::milliseconds(25));
+    }
+  }
+  if (port_ == 0) {
+    ADD_FAILURE() << "gatekeeperd did not start";
+    return;
+  }
+  channel_ = grpc::CreateChannel(address(), grpc::InsecureChannelCredentials());
+  EXPECT_TRUE(channel_->WaitForConnected(std::chrono::system_clock::now() + std::chrono::seconds(10)));
+}
+
+Daemon::~Daemon() {
+  if (pid_ > 0) stop(SIGTERM);
+}
+
+std::unique_ptr<gatekeeper::v1::Gatekeeper::Stub> Daemon::stub() const { return gatekeeper::v1::Gatekeeper::NewStub(channel_); }
+
+int Daemon::stop(int signal_number) {
+  if (pid_ <= 0) return 0;
+  ::kill(pid_, signal_number);
+  int status = 0;
+  ::waitpid(pid_, &status, 0);
+  pid_ = -1;
+  channel_.reset();
+  if (WIFEXITED(status)) return WEXITSTATUS(status);
+  return WIFSIGNALED(status) ? -WTERMSIG(status) : -1;
+}
+
+}  // namespace gk::testing
