@@ -1,0 +1,170 @@
+// gatekeeper-cli: every gatekeeperd RPC from the command line, requests and replies as JSON
+// (protobuf's JSON mapping of gatekeeper.v1, field names in lowerCamelCase or as in the proto).
+//
+//   gatekeeper-cli [--address 127.0.0.1:50051] server-info
+//   gatekeeper-cli machines | machine [ID] | set-state '{"state": {"clampZMm": 1.5}}'
+//   gatekeeper-cli validate-step '{"part": {...}, "step": {"kind": "BEND_UP", ...}}'
+//   gatekeeper-cli validate-steps '{"steps": [...], "stopAtFirstFailure": true}'
+//   gatekeeper-cli upload FILE [--name NAME]        (streams 1 MiB chunks, sha256 declared first)
+//   gatekeeper-cli part-info PART_ID
+//   gatekeeper-cli clearance '{"a": {"partId": "..."}, "b": {"partId": "...", "pose": {...}}, "safetyGapMm": 5}'
+// Exit status: 0 on OK, 1 on an RPC error (printed as JSON with its code), 2 on bad usage.
+#include "gatekeeper/v1/gatekeeper.grpc.pb.h"
+
+#include <CLI/CLI.hpp>
+#include <google/protobuf/util/json_util.h>
+#include <grpcpp/grpcpp.h>
+#include <openssl/evp.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace pb = ::gatekeeper::v1;
+using google::protobuf::Message;
+
+namespace {
+
+int print_reply(const grpc::Status& status, const Message& reply) {
+  if (!status.ok()) {
+    std::printf("{\"error\": {\"code\": %d, \"message\": \"%s\"}}\n", static_cast<int>(status.error_code()),
+                status.error_message().c_str());
+    return 1;
+  }
+  std::string json;
+  google::protobuf::util::JsonPrintOptions options;
+  options.add_whitespace = true;
+  options.always_print_primitive_fields = true;
+  (void)google::protobuf::util::MessageToJsonString(reply, &json, options);
+  std::printf("%s", json.c_str());
+  return 0;
+}
+
+bool parse(const std::string& json, Message* request) {
+  if (json.empty()) return true;
+  const auto status = google::protobuf::util::JsonStringToMessage(json, request);
+  if (!status.ok()) {
+    std::fprintf(stderr, "request JSON: %s\n", status.ToString().c_str());
+    return false;
+  }
+  return true;
+}
+
+std::string sha256_hex(const std::string& bytes) {
+  unsigned char out[EVP_MAX_MD_SIZE];
+  unsigned int n = 0;
+  EVP_Digest(bytes.data(), bytes.size(), out, &n, EVP_sha256(), nullptr);
+  std::string hex;
+  for (unsigned int i = 0; i < n; ++i) {
+    char b[3];
+    std::snprintf(b, sizeof b, "%02x", out[i]);
+    hex += b;
+  }
+  return hex;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string address = "127.0.0.1:50051";
+  double timeout_s = 30.0;
+  CLI::App app{"gatekeeper-cli: every gatekeeperd RPC, JSON in and out"};
+  app.add_option("--address", address);
+  app.add_option("--timeout", timeout_s, "deadline per call, seconds");
+  app.require_subcommand(1);
+  std::string json, id, file, name;
+  auto* server_info = app.add_subcommand("server-info", "version, machines, per-RPC counts and latencies");
+  auto* machines = app.add_subcommand("machines", "list the machines");
+  auto* machine = app.add_subcommand("machine", "one machine with its model file and state");
+  machine->add_option("id", id);
+  auto* set_state = app.add_subcommand("set-state", "set a machine's state (SetMachineStateRequest JSON)");
+  set_state->add_option("json", json)->required();
+  auto* validate = app.add_subcommand("validate-step", "ValidateStepRequest JSON");
+  validate->add_option("json", json)->required();
+  auto* validate_many = app.add_subcommand("validate-steps", "ValidateStepsRequest JSON");
+  validate_many->add_option("json", json)->required();
+  auto* upload = app.add_subcommand("upload", "upload a part file (STL, OBJ, OFF, PLY, glTF, STEP, BREP, IGES)");
+  upload->add_option("file", file)->required()->check(CLI::ExistingFile);
+  upload->add_option("--name", name);
+  auto* part_info = app.add_subcommand("part-info", "a stored part");
+  part_info->add_option("id", id)->required();
+  auto* clearance = app.add_subcommand("clearance", "ClearanceQueryRequest JSON");
+  clearance->add_option("json", json)->required();
+  CLI11_PARSE(app, argc, argv);
+
+  auto channel = grpc::CreateChannel(address, grpc::InsecureChannelCredentials());
+  auto stub = pb::Gatekeeper::NewStub(channel);
+  grpc::ClientContext ctx;
+  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::milliseconds(static_cast<long>(timeout_s * 1000)));
+
+  if (*server_info) {
+    pb::ServerInfo reply;
+    return print_reply(stub->GetServerInfo(&ctx, {}, &reply), reply);
+  }
+  if (*machines) {
+    pb::ListMachinesResponse reply;
+    return print_reply(stub->ListMachines(&ctx, {}, &reply), reply);
+  }
+  if (*machine) {
+    pb::GetMachineRequest request;
+    request.set_machine_id(id);
+    pb::MachineInfo reply;
+    return print_reply(stub->GetMachine(&ctx, request, &reply), reply);
+  }
+  if (*set_state) {
+    pb::SetMachineStateRequest request;
+    if (!parse(json, &request)) return 2;
+    pb::MachineInfo reply;
+    return print_reply(stub->SetMachineState(&ctx, request, &reply), reply);
+  }
+  if (*validate) {
+    pb::ValidateStepRequest request;
+    if (!parse(json, &request)) return 2;
+    pb::ValidateStepResponse reply;
+    return print_reply(stub->ValidateStep(&ctx, request, &reply), reply);
+  }
+  if (*validate_many) {
+    pb::ValidateStepsRequest request;
+    if (!parse(json, &request)) return 2;
+    pb::ValidateStepsResponse reply;
+    return print_reply(stub->ValidateSteps(&ctx, request, &reply), reply);
+  }
+  if (*part_info) {
+    pb::GetPartInfoRequest request;
+    request.set_part_id(id);
+    pb::PartInfo reply;
+    return print_reply(stub->GetPartInfo(&ctx, request, &reply), reply);
+  }
+  if (*clearance) {
+    pb::ClearanceQueryRequest request;
+    if (!parse(json, &request)) return 2;
+    pb::ClearanceQueryResponse reply;
+    return print_reply(stub->ClearanceQuery(&ctx, request, &reply), reply);
+  }
+  if (*upload) {
+    std::ifstream in(file, std::ios::binary);
+    std::stringstream buffer;
+    buffer << in.rdbuf();
+    const std::string bytes = buffer.str();
+    std::string format = std::filesystem::path(file).extension().string();
+    if (!format.empty()) format = format.substr(1);
+    for (char& c : format) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    pb::PartInfo reply;
+    auto writer = stub->UploadPart(&ctx, &reply);
+    pb::UploadPartChunk header;
+    header.mutable_header()->set_name(name.empty() ? std::filesystem::path(file).filename().string() : name);
+    header.mutable_header()->set_format(format);
+    header.mutable_header()->set_size_bytes(bytes.size());
+    header.mutable_header()->set_sha256(sha256_hex(bytes));
+    writer->Write(header);
+    for (std::size_t at = 0; at < bytes.size(); at += 1u << 20) {
+      pb::UploadPartChunk chunk;
+      chunk.set_data(bytes.substr(at, 1u << 20));
+      if (!writer->Write(chunk)) break;
+    }
+    writer->WritesDone();
+    return print_reply(writer->Finish(), reply);
+  }
+  return 2;
+}
