@@ -7,6 +7,8 @@
 #include "server/machine_registry.h"
 #include "server/part_registry.h"
 #include "server/rpc_stats.h"
+#include "server/scene_queries.h"
+#include "server/scene_store.h"
 #include "server/work_pool.h"
 
 #include <memory>
@@ -24,7 +26,7 @@ struct ServiceOptions {
 
 class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackService {
  public:
-  GatekeeperService(MachineRegistry& machines, PartRegistry& parts, ServiceOptions options);
+  GatekeeperService(MachineRegistry& machines, PartRegistry& parts, SceneStore& scenes, ServiceOptions options);
   ~GatekeeperService() override;
 
   void stop_work() { pool_.stop(); }
@@ -47,6 +49,27 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
                                        pb::MachineInfo* response) override;
   grpc::ServerUnaryReactor* SetMachineState(grpc::CallbackServerContext* ctx, const pb::SetMachineStateRequest* request,
                                             pb::MachineInfo* response) override;
+  grpc::ServerUnaryReactor* PutMachineModel(grpc::CallbackServerContext* ctx, const pb::PutMachineModelRequest* request,
+                                            pb::MachineInfo* response) override;
+  grpc::ServerUnaryReactor* CreateScene(grpc::CallbackServerContext* ctx, const pb::CreateSceneRequest* request,
+                                        pb::SceneInfo* response) override;
+  grpc::ServerUnaryReactor* PutObject(grpc::CallbackServerContext* ctx, const pb::PutObjectRequest* request,
+                                      pb::MoveResult* response) override;
+  grpc::ServerUnaryReactor* MoveObject(grpc::CallbackServerContext* ctx, const pb::MoveObjectRequest* request,
+                                       pb::MoveResult* response) override;
+  grpc::ServerBidiReactor<pb::MoveObjectRequest, pb::MoveResult>* DragObject(grpc::CallbackServerContext* ctx) override;
+  grpc::ServerUnaryReactor* DeleteObject(grpc::CallbackServerContext* ctx, const pb::DeleteObjectRequest* request,
+                                         pb::SceneInfo* response) override;
+  grpc::ServerUnaryReactor* GetScene(grpc::CallbackServerContext* ctx, const pb::GetSceneRequest* request,
+                                     pb::SceneInfo* response) override;
+  grpc::ServerUnaryReactor* StartAudit(grpc::CallbackServerContext* ctx, const pb::StartAuditRequest* request,
+                                       pb::AuditJob* response) override;
+  grpc::ServerWriteReactor<pb::AuditProgress>* WatchAudit(grpc::CallbackServerContext* ctx,
+                                                          const pb::WatchAuditRequest* request) override;
+  grpc::ServerUnaryReactor* CancelAudit(grpc::CallbackServerContext* ctx, const pb::CancelAuditRequest* request,
+                                        pb::AuditProgress* response) override;
+  grpc::ServerUnaryReactor* GetAuditReport(grpc::CallbackServerContext* ctx, const pb::GetAuditReportRequest* request,
+                                           pb::AuditReport* response) override;
   grpc::ServerUnaryReactor* GetServerInfo(grpc::CallbackServerContext* ctx, const pb::GetServerInfoRequest* request,
                                           pb::ServerInfo* response) override;
 
@@ -55,9 +78,18 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
                             const std::string& default_machine, pb::ValidateStepResponse* response);
   grpc::Status clearance(const pb::ClearanceQueryRequest& request, pb::ClearanceQueryResponse* response);
   grpc::Status machine_info(const std::string& id, pb::MachineInfo* response);
+ public:
+  // A move of one object (unary, or one message of a drag): stored, then its contacts.
+  grpc::Status move(const pb::MoveObjectRequest& request, pb::MoveResult* response);
+  SceneStore& scenes() { return scenes_; }
+  AuditJobs& audits() { return audits_; }
+
+ private:
 
   MachineRegistry& machines_;
   PartRegistry& parts_;
+  SceneStore& scenes_;
+  AuditJobs audits_;
   ServiceOptions options_;
   RpcStats stats_;
   WorkPool pool_;

@@ -41,6 +41,21 @@ Result<bool> MachineRegistry::set_state(const std::string& id, const p4::Machine
   return true;
 }
 
+Result<MachineSnapshot> MachineRegistry::put_model(const std::string& id, const std::string& model_toml) {
+  if (id.empty()) return invalid_argument("machine_id", "must not be empty");
+  auto model = p4::parse_machine_model(model_toml);
+  if (!model.ok()) return invalid_argument("model_toml." + model.error().field, model.error().message);
+  std::lock_guard<std::mutex> lock(mutex_);
+  Machine& m = machines_[id];
+  m.snapshot.id = id;
+  m.snapshot.model = model.value();
+  m.snapshot.model_toml = model_toml;
+  m.snapshot.state = p4::MachineState{};
+  m.snapshot.state.engaged_segments.assign(model.value().aba.segment_widths_mm.size(), true);
+  m.snapshot.version += 1;
+  return m.snapshot;
+}
+
 Result<p4::StepValidator*> MachineRegistry::validator(const std::string& id, const p4::MachineState* state) {
   auto snapshot = get(id);
   if (!snapshot.ok()) return snapshot.error();
@@ -49,7 +64,8 @@ Result<p4::StepValidator*> MachineRegistry::validator(const std::string& id, con
     std::unique_ptr<p4::StepValidator> validator;
   };
   thread_local std::unordered_map<std::string, Local> locals;
-  const std::string key = std::to_string(reinterpret_cast<std::uintptr_t>(this)) + "/" + snapshot.value().id;
+  const std::string key = std::to_string(reinterpret_cast<std::uintptr_t>(this)) + "/" + snapshot.value().id + "/" +
+                          std::to_string(snapshot.value().version);
   Local& local = locals[key];
   if (!local.validator) {
     auto scene = p4::MachineScene::build(snapshot.value().model);

@@ -18,6 +18,7 @@ struct MachineSnapshot {
   p4::MachineModel model;
   std::string model_toml;
   p4::MachineState state;
+  unsigned long long version = 0;  // bumps when the model is replaced
 };
 
 class MachineRegistry {
@@ -30,6 +31,8 @@ class MachineRegistry {
   std::vector<MachineSnapshot> list() const;
   Result<MachineSnapshot> get(const std::string& id) const;  // "" means the default
   Result<bool> set_state(const std::string& id, const p4::MachineState& state);
+  // Adds or replaces a machine from its model file; the state resets to all segments engaged.
+  Result<MachineSnapshot> put_model(const std::string& id, const std::string& model_toml);
 
   // The calling thread's validator for the machine, set to `state` (or the machine's current state).
   Result<p4::StepValidator*> validator(const std::string& id, const p4::MachineState* state);

@@ -87,7 +87,12 @@ int main(int argc, char** argv) {
   gk::server::ServiceOptions options;
   options.workers = config.workers;
   options.max_queued = static_cast<std::size_t>(config.queue);
-  gk::server::GatekeeperService service(*machines.value(), parts, options);
+  auto scenes = gk::server::SceneStore::open(config.data_dir);
+  if (!scenes.ok()) {
+    spdlog::error("{}", scenes.error().to_string());
+    return 1;
+  }
+  gk::server::GatekeeperService service(*machines.value(), parts, *scenes.value(), options);
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
