@@ -9,7 +9,7 @@ import unittest
 
 import grpc
 
-from gatekeeper_client import sequencer_sim
+from gatekeeper_client import layout_tool, sequencer_sim
 from gatekeeper_client.connection import connect, pb
 
 DAEMON = os.environ.get("GATEKEEPERD", os.path.join(os.path.dirname(__file__), "..", "..", "..", "build", "server", "gatekeeperd"))
@@ -68,6 +68,9 @@ class DaemonTest(unittest.TestCase):
         with self.assertRaises(grpc.RpcError) as err:
             self.stub.GetPartInfo(pb.GetPartInfoRequest(part_id="0" * 64), timeout=5)
         self.assertEqual(err.exception.code(), grpc.StatusCode.NOT_FOUND)
+
+    def test_layout_tool_session(self):
+        self.assertEqual(layout_tool.main(["--address", self.address, "--data", SHARED]), 0)
 
     def test_sequencer_simulator_runs_and_finds_a_sequence(self):
         self.assertEqual(sequencer_sim.main(["--address", self.address, "--orders", "1"]), 0)

@@ -1,0 +1,92 @@
+"""A layout-tool session against gatekeeperd: upload meshes, build a scene, drag an object through
+it (every frame answered), ask for a clearance, and audit the scene with a progress bar.
+
+    /usr/bin/python3 -m gatekeeper_client.layout_tool [--address 127.0.0.1:50051] [--data ../shared/data]
+"""
+import argparse
+import hashlib
+import os
+import sys
+import time
+
+from gatekeeper_client.connection import connect, pb
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+DEFAULT_DATA = os.environ.get("GATEKEEPER_SHARED_DATA", os.path.normpath(os.path.join(HERE, "..", "..", "..", "..", "shared", "data")))
+
+
+def upload(stub, path):
+    data = open(path, "rb").read()
+    fmt = os.path.splitext(path)[1][1:].lower()
+    header = pb.UploadHeader(name=os.path.basename(path), format=fmt, size_bytes=len(data), sha256=hashlib.sha256(data).hexdigest())
+
+    def chunks():
+        yield pb.UploadPartChunk(header=header)
+        for at in range(0, len(data), 1 << 20):
+            yield pb.UploadPartChunk(data=data[at:at + (1 << 20)])
+
+    return stub.UploadPart(chunks(), timeout=120)
+
+
+def pose(x, y=0.0, z=0.0, deg=0.0):
+    return pb.Pose(translation=pb.Vec3(x_mm=x, y_mm=y, z_mm=z), rotation_axis=pb.Vec3(z_mm=1.0), rotation_deg=deg)
+
+
+def progress_bar(p, width=30):
+    done = p.pairs_done / p.pairs_total if p.pairs_total else 1.0
+    filled = int(done * width)
+    return f"[{'#' * filled}{'.' * (width - filled)}] {p.pairs_done}/{p.pairs_total} pairs, {p.clashes} clashes, eta {p.eta_s:.1f} s"
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--address", default="127.0.0.1:50051")
+    parser.add_argument("--data", default=DEFAULT_DATA)
+    args = parser.parse_args(argv)
+    stub, _ = connect(args.address)
+    robot = upload(stub, os.path.join(args.data, "meshes", "fcl", "rob.obj"))
+    motor = upload(stub, os.path.join(args.data, "meshes", "occt", "motor.stl"))
+    print(f"uploaded robot ({robot.triangles} triangles) and motor ({motor.triangles} triangles)")
+    scene = stub.CreateScene(pb.CreateSceneRequest(name="layout demo"), timeout=5)
+    placed = {}
+    for name, part, p in [("robot.1", robot, pose(0)), ("robot.2", robot, pose(2500)), ("robot.3", robot, pose(5000, deg=90)),
+                          ("motor.1", motor, pose(1250, 1500))]:
+        r = stub.PutObject(pb.PutObjectRequest(scene_id=scene.scene_id, clearance_mm=50.0,
+                                               object=pb.SceneObject(name=name, category=name.split(".")[0], part_id=part.part_id, pose=p)),
+                           timeout=10)
+        placed[name] = r.object_id
+        print(f"put {name}: {pb.Verdict.Name(r.verdict)}")
+
+    # Drag robot.2 from x = 2500 towards robot.1 and back, one frame per move.
+    frames = [pose(2500 - 150 * k) for k in range(12)] + [pose(800 + 200 * k) for k in range(8)]
+
+    def moves():
+        for p in frames:
+            yield pb.MoveObjectRequest(scene_id=scene.scene_id, object_id=placed["robot.2"], pose=p, clearance_mm=50.0)
+
+    print("dragging robot.2:")
+    for p, result in zip(frames, stub.DragObject(moves(), timeout=60)):
+        names = ", ".join(f"{c.other_object_id[:12]} {pb.Verdict.Name(c.verdict)} {c.distance_mm:.1f} mm" for c in result.contacts)
+        print(f"  x={p.translation.x_mm:7.1f}  {pb.Verdict.Name(result.verdict):10s} {result.elapsed_us:7.0f} us  {names}")
+
+    c = stub.ClearanceQuery(pb.ClearanceQueryRequest(a=pb.PosedPart(part_id=robot.part_id),
+                                                     b=pb.PosedPart(part_id=robot.part_id, pose=pose(1800)),
+                                                     safety_gap_mm=1000.0), timeout=30)
+    print(f"clearance robot vs robot 1800 mm apart: {c.distance_mm:.3f} mm ({pb.Verdict.Name(c.verdict)}), "
+          f"{c.pairs_within_gap} triangle pairs closer than 1000 mm, {c.elapsed_us:.0f} us")
+
+    job = stub.StartAudit(pb.StartAuditRequest(scene_id=scene.scene_id, clearance_mm=100.0), timeout=5)
+    last = None
+    for p in stub.WatchAudit(pb.WatchAuditRequest(job_id=job.job_id), timeout=120):
+        last = p
+        print("\r  audit " + progress_bar(p), end="", flush=True)
+    print()
+    report = stub.GetAuditReport(pb.GetAuditReportRequest(job_id=job.job_id), timeout=5)
+    print(f"audit {pb.AuditState.Name(report.progress.state)}: {len(report.clashes)} clashes")
+    for clash in report.clashes:
+        print(f"  {clash.object_a[:12]} x {clash.object_b[:12]}: {pb.Verdict.Name(clash.verdict)} {clash.distance_mm:.1f} mm")
+    return 0 if last is not None and report.progress.state == pb.DONE else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
