@@ -284,14 +284,30 @@ grpc::Status GatekeeperService::clearance(const pb::ClearanceQueryRequest& reque
   const auto t0 = Clock::now();
   if (!std::isfinite(request.safety_gap_mm()) || request.safety_gap_mm() < 0.0)
     return {grpc::StatusCode::INVALID_ARGUMENT, "safety_gap_mm: must be a finite, non-negative distance"};
-  auto a = parts_.load(request.a().part_id(), 0.05);
+  // Each side is an uploaded part at a pose, or a scene object (its part at its pose).
+  auto resolve = [this](const pb::PosedPart& in, const std::string& side) -> Result<std::pair<std::string, RigidTransform>> {
+    if (!in.object_id().empty()) {
+      auto scene = scenes_.get(in.scene_id());
+      if (!scene.ok()) return Error{scene.error().code, side + ".scene_id", scene.error().message};
+      auto it = scene.value().objects.find(in.object_id());
+      if (it == scene.value().objects.end())
+        return Error{ErrorCode::kNotFound, side + ".object_id", "no object '" + in.object_id() + "'"};
+      return std::make_pair(it->second.part_id, it->second.pose.transform());
+    }
+    auto pose = to_pose(in.pose(), side + ".pose");
+    if (!pose.ok()) return pose.error();
+    return std::make_pair(in.part_id(), pose.value());
+  };
+  auto ra = resolve(request.a(), "a");
+  if (!ra.ok()) return to_status(ra.error());
+  auto rb = resolve(request.b(), "b");
+  if (!rb.ok()) return to_status(rb.error());
+  auto a = parts_.load(ra.value().first, 0.05);
   if (!a.ok()) return to_status(Error{a.error().code, "a.part_id", a.error().message});
-  auto b = parts_.load(request.b().part_id(), 0.05);
+  auto b = parts_.load(rb.value().first, 0.05);
   if (!b.ok()) return to_status(Error{b.error().code, "b.part_id", b.error().message});
-  auto pa = to_pose(request.a().pose(), "a.pose");
-  if (!pa.ok()) return to_status(pa.error());
-  auto pb_ = to_pose(request.b().pose(), "b.pose");
-  if (!pb_.ok()) return to_status(pb_.error());
+  Result<RigidTransform> pa = ra.value().second;
+  Result<RigidTransform> pb_ = rb.value().second;
   auto verdict = assess(*a.value()->bvh, pa.value(), *b.value()->bvh, pb_.value());
   if (!verdict.ok()) return to_status(verdict.error());
   const VerdictResult& v = verdict.value();

@@ -1,11 +1,18 @@
 #include "server/machine_registry.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <unordered_map>
 
 namespace gk::server {
 
-Result<std::unique_ptr<MachineRegistry>> MachineRegistry::create() {
+Result<std::unique_ptr<MachineRegistry>> MachineRegistry::create(const std::string& models_dir) {
   std::unique_ptr<MachineRegistry> registry(new MachineRegistry());
+  registry->models_dir_ = models_dir;
   auto model = p4::default_machine_model();
   if (!model.ok()) return model.error();
   Machine m;
@@ -14,6 +21,19 @@ Result<std::unique_ptr<MachineRegistry>> MachineRegistry::create() {
   m.snapshot.model_toml = p4::embedded_default_model_toml();
   m.snapshot.state.engaged_segments.assign(model.value().aba.segment_widths_mm.size(), true);
   registry->machines_[kDefaultMachine] = std::move(m);
+  if (!models_dir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(models_dir, ec);
+    if (ec) return Error{ErrorCode::kInternal, "storage", "cannot create " + models_dir};
+    for (const auto& entry : std::filesystem::directory_iterator(models_dir, ec)) {
+      if (entry.path().extension() != ".toml") continue;
+      std::ifstream in(entry.path());
+      std::stringstream text;
+      text << in.rdbuf();
+      auto installed = registry->install(entry.path().stem().string(), text.str());
+      if (!installed.ok()) return Error{installed.error().code, entry.path().string(), installed.error().message};
+    }
+  }
   return registry;
 }
 
@@ -42,7 +62,30 @@ Result<bool> MachineRegistry::set_state(const std::string& id, const p4::Machine
 }
 
 Result<MachineSnapshot> MachineRegistry::put_model(const std::string& id, const std::string& model_toml) {
-  if (id.empty()) return invalid_argument("machine_id", "must not be empty");
+  if (id.empty() || id.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_.") != std::string::npos ||
+      id[0] == '.')
+    return invalid_argument("machine_id", "must be letters, digits, '-', '_' or '.'");
+  auto model = p4::parse_machine_model(model_toml);
+  if (!model.ok()) return invalid_argument("model_toml." + model.error().field, model.error().message);
+  if (!models_dir_.empty()) {
+    const std::string tmp = models_dir_ + "/." + id + ".toml.tmp", final_path = models_dir_ + "/" + id + ".toml";
+    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd < 0) return Error{ErrorCode::kInternal, "storage", "cannot write the model file"};
+    const bool written = ::write(fd, model_toml.data(), model_toml.size()) == static_cast<ssize_t>(model_toml.size()) &&
+                         ::fsync(fd) == 0;
+    ::close(fd);
+    if (!written || std::rename(tmp.c_str(), final_path.c_str()) != 0)
+      return Error{ErrorCode::kInternal, "storage", "cannot store the model file"};
+    const int dir = ::open(models_dir_.c_str(), O_RDONLY | O_DIRECTORY);
+    if (dir >= 0) {
+      ::fsync(dir);
+      ::close(dir);
+    }
+  }
+  return install(id, model_toml);
+}
+
+Result<MachineSnapshot> MachineRegistry::install(const std::string& id, const std::string& model_toml) {
   auto model = p4::parse_machine_model(model_toml);
   if (!model.ok()) return invalid_argument("model_toml." + model.error().field, model.error().message);
   std::lock_guard<std::mutex> lock(mutex_);

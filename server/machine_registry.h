@@ -25,13 +25,15 @@ class MachineRegistry {
  public:
   static constexpr const char* kDefaultMachine = "p4-default";
 
-  // Starts with the embedded default P4 model as "p4-default".
-  static Result<std::unique_ptr<MachineRegistry>> create();
+  // Starts with the embedded default P4 model as "p4-default", then the models stored in
+  // models_dir (one <id>.toml each; empty: none are stored).
+  static Result<std::unique_ptr<MachineRegistry>> create(const std::string& models_dir = "");
 
   std::vector<MachineSnapshot> list() const;
   Result<MachineSnapshot> get(const std::string& id) const;  // "" means the default
   Result<bool> set_state(const std::string& id, const p4::MachineState& state);
-  // Adds or replaces a machine from its model file; the state resets to all segments engaged.
+  // Adds or replaces a machine from its model file, acknowledged once the file is on disk (written
+  // to a temporary file, fsync'd, renamed); the state resets to all segments engaged.
   Result<MachineSnapshot> put_model(const std::string& id, const std::string& model_toml);
 
   // The calling thread's validator for the machine, set to `state` (or the machine's current state).
@@ -43,6 +45,9 @@ class MachineRegistry {
   };
   MachineRegistry() = default;
   std::string resolve(const std::string& id) const { return id.empty() ? kDefaultMachine : id; }
+  Result<MachineSnapshot> install(const std::string& id, const std::string& model_toml);
+
+  std::string models_dir_;
 
   mutable std::mutex mutex_;
   std::map<std::string, Machine> machines_;

@@ -79,7 +79,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   gk::server::PartRegistry parts(*store.value());
-  auto machines = gk::server::MachineRegistry::create();
+  auto machines = gk::server::MachineRegistry::create(config.data_dir + "/machines");
   if (!machines.ok()) {
     spdlog::error("default machine model: {}", machines.error().to_string());
     return 1;

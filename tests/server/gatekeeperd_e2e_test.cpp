@@ -139,6 +139,10 @@ TEST(GatekeeperdE2E, BadInputGetsInvalidArgumentOrNotFoundNamingTheField) {
     EXPECT_EQ(s.error_code(), c.code) << s.error_message();
     EXPECT_NE(s.error_message().find(c.field), std::string::npos) << s.error_message();
   }
+  // An oversize message (over gRPC's 4 MiB receive limit) is refused; the daemon keeps serving.
+  auto huge = bend_request(100.0, 90.0);
+  huge.set_machine_id(std::string(5u << 20, 'x'));
+  EXPECT_EQ(call(*stub, huge, &out).error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
   // Still serving.
   EXPECT_TRUE(call(*stub, bend_request(100.0, 90.0), &out).ok());
 }

@@ -2,6 +2,7 @@
 // jobs (watch, report against an in-process brute-force answer, cancel), and machine model upload.
 #include "kernel/contact_verdict.h"
 #include "kernel/mesh_bvh.h"
+#include "kernel/mesh_distance.h"
 #include "mesh_io/mesh_file_reader.h"
 #include "tests/server/daemon_fixture.h"
 #include "tests/support/random_meshes.h"
@@ -160,6 +161,17 @@ TEST(ScenesE2E, AuditJobsReportWhatBruteForceFindsAndCancelKeepsPartialResults) 
       if (v.verdict != Verdict::kClear || v.distance_mm < 20.0) expected.insert(std::minmax(ids[i], ids[j]));
     }
   ASSERT_GE(expected.size(), 2u);
+  // Clearance between two scene objects by id equals the kernel's answer at their poses.
+  pb::ClearanceQueryRequest cq;
+  cq.mutable_a()->set_scene_id(scene.scene_id());
+  cq.mutable_a()->set_object_id(ids[2]);
+  cq.mutable_b()->set_scene_id(scene.scene_id());
+  cq.mutable_b()->set_object_id(ids[3]);
+  pb::ClearanceQueryResponse cr;
+  grpc::ClientContext qctx;
+  ASSERT_TRUE(stub->ClearanceQuery(&qctx, cq, &cr).ok());
+  EXPECT_NEAR(cr.distance_mm(), distance(*bvh, RigidTransform::from_translation(Vec3(xs[2], 0, 0)), *bvh,
+                                         RigidTransform::from_translation(Vec3(xs[3], 0, 0))).value().distance_mm, 1e-9);
   pb::StartAuditRequest start;
   start.set_scene_id(scene.scene_id());
   start.set_clearance_mm(20.0);
@@ -216,7 +228,8 @@ TEST(ScenesE2E, AuditJobsReportWhatBruteForceFindsAndCancelKeepsPartialResults) 
 }
 
 TEST(ScenesE2E, AMachineModelFileCanBeAddedAndBadOnesAreRefused) {
-  Daemon daemon(testing::temp_dir("model"));
+  const std::string dir = testing::temp_dir("model");
+  Daemon daemon(dir);
   auto stub = daemon.stub();
   grpc::ClientContext gctx;
   pb::GetMachineRequest get;
@@ -252,6 +265,16 @@ TEST(ScenesE2E, AMachineModelFileCanBeAddedAndBadOnesAreRefused) {
   const grpc::Status bad = stub->PutMachineModel(&bctx, put, &info);
   EXPECT_EQ(bad.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_NE(bad.error_message().find("model_toml"), std::string::npos);
+  put.set_machine_id("../escape");
+  grpc::ClientContext ectx;
+  EXPECT_EQ(stub->PutMachineModel(&ectx, put, &info).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  // The stored model is still there after a kill -9.
+  daemon.stop(SIGKILL);
+  Daemon again(dir);
+  grpc::ClientContext actx;
+  pb::ListMachinesResponse after;
+  ASSERT_TRUE(again.stub()->ListMachines(&actx, pb::ListMachinesRequest(), &after).ok());
+  EXPECT_EQ(after.machines_size(), 2);
 }
 
 }  // namespace
