@@ -8,6 +8,12 @@
 //   gatekeeper-cli upload FILE [--name NAME]        (streams 1 MiB chunks, sha256 declared first)
 //   gatekeeper-cli part-info PART_ID
 //   gatekeeper-cli clearance '{"a": {"partId": "..."}, "b": {"partId": "...", "pose": {...}}, "safetyGapMm": 5}'
+//   gatekeeper-cli put-model ID FILE.toml
+//   gatekeeper-cli create-scene NAME | scene SCENE_ID | delete-object SCENE_ID OBJECT_ID
+//   gatekeeper-cli put-object '{"sceneId": "...", "object": {"partId": "...", "pose": {...}}}'
+//   gatekeeper-cli move-object '{"sceneId": "...", "objectId": "...", "pose": {...}}'
+//   gatekeeper-cli drag < moves.jsonl                (one MoveObjectRequest JSON per line)
+//   gatekeeper-cli start-audit '{"sceneId": "...", "clearanceMm": 10}' | watch-audit JOB | cancel-audit JOB | audit-report JOB
 // Exit status: 0 on OK, 1 on an RPC error (printed as JSON with its code), 2 on bad usage.
 #include "gatekeeper/v1/gatekeeper.grpc.pb.h"
 
@@ -19,6 +25,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 
 namespace pb = ::gatekeeper::v1;
@@ -91,6 +98,30 @@ int main(int argc, char** argv) {
   part_info->add_option("id", id)->required();
   auto* clearance = app.add_subcommand("clearance", "ClearanceQueryRequest JSON");
   clearance->add_option("json", json)->required();
+  std::string id2;
+  auto* put_model = app.add_subcommand("put-model", "add or replace a machine from a model file");
+  put_model->add_option("id", id)->required();
+  put_model->add_option("file", file)->required()->check(CLI::ExistingFile);
+  auto* create_scene = app.add_subcommand("create-scene", "a new, empty scene");
+  create_scene->add_option("name", name);
+  auto* scene = app.add_subcommand("scene", "a scene and its objects");
+  scene->add_option("id", id)->required();
+  auto* put_object = app.add_subcommand("put-object", "PutObjectRequest JSON");
+  put_object->add_option("json", json)->required();
+  auto* move_object = app.add_subcommand("move-object", "MoveObjectRequest JSON");
+  move_object->add_option("json", json)->required();
+  auto* drag = app.add_subcommand("drag", "MoveObjectRequest JSON lines on stdin, each answered");
+  auto* delete_object = app.add_subcommand("delete-object", "remove an object from a scene");
+  delete_object->add_option("scene", id)->required();
+  delete_object->add_option("object", id2)->required();
+  auto* start_audit = app.add_subcommand("start-audit", "StartAuditRequest JSON");
+  start_audit->add_option("json", json)->required();
+  auto* watch_audit = app.add_subcommand("watch-audit", "stream an audit's progress");
+  watch_audit->add_option("job", id)->required();
+  auto* cancel_audit = app.add_subcommand("cancel-audit", "cancel an audit (its results so far are kept)");
+  cancel_audit->add_option("job", id)->required();
+  auto* audit_report = app.add_subcommand("audit-report", "an audit's progress and clashes");
+  audit_report->add_option("job", id)->required();
   CLI11_PARSE(app, argc, argv);
 
   auto channel = grpc::CreateChannel(address, grpc::InsecureChannelCredentials());
@@ -141,6 +172,95 @@ int main(int argc, char** argv) {
     if (!parse(json, &request)) return 2;
     pb::ClearanceQueryResponse reply;
     return print_reply(stub->ClearanceQuery(&ctx, request, &reply), reply);
+  }
+  if (*put_model) {
+    std::ifstream in(file);
+    std::stringstream text;
+    text << in.rdbuf();
+    pb::PutMachineModelRequest request;
+    request.set_machine_id(id);
+    request.set_model_toml(text.str());
+    pb::MachineInfo reply;
+    return print_reply(stub->PutMachineModel(&ctx, request, &reply), reply);
+  }
+  if (*create_scene) {
+    pb::CreateSceneRequest request;
+    request.set_name(name);
+    pb::SceneInfo reply;
+    return print_reply(stub->CreateScene(&ctx, request, &reply), reply);
+  }
+  if (*scene) {
+    pb::GetSceneRequest request;
+    request.set_scene_id(id);
+    pb::SceneInfo reply;
+    return print_reply(stub->GetScene(&ctx, request, &reply), reply);
+  }
+  if (*put_object) {
+    pb::PutObjectRequest request;
+    if (!parse(json, &request)) return 2;
+    pb::MoveResult reply;
+    return print_reply(stub->PutObject(&ctx, request, &reply), reply);
+  }
+  if (*move_object) {
+    pb::MoveObjectRequest request;
+    if (!parse(json, &request)) return 2;
+    pb::MoveResult reply;
+    return print_reply(stub->MoveObject(&ctx, request, &reply), reply);
+  }
+  if (*drag) {
+    auto stream = stub->DragObject(&ctx);
+    std::string line;
+    while (std::getline(std::cin, line)) {
+      if (line.empty()) continue;
+      pb::MoveObjectRequest request;
+      if (!parse(line, &request)) return 2;
+      if (!stream->Write(request)) break;
+      pb::MoveResult reply;
+      if (!stream->Read(&reply)) break;
+      print_reply(grpc::Status::OK, reply);
+      std::printf("\n");
+    }
+    stream->WritesDone();
+    pb::MoveResult none;
+    const grpc::Status status = stream->Finish();
+    return status.ok() ? 0 : print_reply(status, none);
+  }
+  if (*delete_object) {
+    pb::DeleteObjectRequest request;
+    request.set_scene_id(id);
+    request.set_object_id(id2);
+    pb::SceneInfo reply;
+    return print_reply(stub->DeleteObject(&ctx, request, &reply), reply);
+  }
+  if (*start_audit) {
+    pb::StartAuditRequest request;
+    if (!parse(json, &request)) return 2;
+    pb::AuditJob reply;
+    return print_reply(stub->StartAudit(&ctx, request, &reply), reply);
+  }
+  if (*watch_audit) {
+    pb::WatchAuditRequest request;
+    request.set_job_id(id);
+    auto reader = stub->WatchAudit(&ctx, request);
+    pb::AuditProgress progress;
+    while (reader->Read(&progress)) {
+      print_reply(grpc::Status::OK, progress);
+      std::printf("\n");
+    }
+    const grpc::Status status = reader->Finish();
+    return status.ok() ? 0 : print_reply(status, progress);
+  }
+  if (*cancel_audit) {
+    pb::CancelAuditRequest request;
+    request.set_job_id(id);
+    pb::AuditProgress reply;
+    return print_reply(stub->CancelAudit(&ctx, request, &reply), reply);
+  }
+  if (*audit_report) {
+    pb::GetAuditReportRequest request;
+    request.set_job_id(id);
+    pb::AuditReport reply;
+    return print_reply(stub->GetAuditReport(&ctx, request, &reply), reply);
   }
   if (*upload) {
     std::ifstream in(file, std::ios::binary);
