@@ -560,6 +560,10 @@ grpc::ServerUnaryReactor* GatekeeperService::GetServerInfo(grpc::CallbackServerC
     r->set_errors(s.errors);
     r->set_p50_us(s.p50_us);
     r->set_p99_us(s.p99_us);
+    for (std::size_t b = 0; b < RpcStats::kBuckets; ++b) {
+      r->add_histogram_bounds_us(static_cast<double>(1ull << b));
+      r->add_histogram_counts(s.histogram[b]);
+    }
   }
   response->set_parts_stored(parts_.store().count());
   return finish(ctx, stats_, "GetServerInfo", t0, grpc::Status::OK);

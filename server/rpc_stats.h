@@ -13,10 +13,12 @@ namespace gk::server {
 
 class RpcStats {
  public:
+  static constexpr std::size_t kBuckets = 25;  // 1 us .. 2^24 us
   struct Summary {
     std::string method;
     std::uint64_t calls = 0, errors = 0;
     double p50_us = 0.0, p99_us = 0.0;
+    std::array<std::uint64_t, kBuckets> histogram{};  // calls of at most 2^i microseconds
   };
 
   void record(const std::string& method, double micros, bool error) {
@@ -25,6 +27,9 @@ class RpcStats {
     ++e.calls;
     if (error) ++e.errors;
     e.recent[e.next++ % e.recent.size()] = micros;
+    std::size_t bucket = 0;
+    while (bucket + 1 < kBuckets && static_cast<double>(1ull << bucket) < micros) ++bucket;
+    ++e.histogram[bucket];
   }
 
   std::vector<Summary> summaries() const {
@@ -34,7 +39,7 @@ class RpcStats {
       const std::size_t n = std::min<std::size_t>(e.calls, e.recent.size());
       std::vector<double> sorted(e.recent.begin(), e.recent.begin() + static_cast<long>(n));
       std::sort(sorted.begin(), sorted.end());
-      Summary s{method, e.calls, e.errors, 0.0, 0.0};
+      Summary s{method, e.calls, e.errors, 0.0, 0.0, e.histogram};
       if (n > 0) {
         s.p50_us = sorted[n / 2];
         s.p99_us = sorted[std::min(n - 1, n * 99 / 100)];
@@ -49,6 +54,7 @@ class RpcStats {
     std::uint64_t calls = 0, errors = 0;
     std::array<double, 4096> recent{};
     std::uint64_t next = 0;
+    std::array<std::uint64_t, kBuckets> histogram{};
   };
   mutable std::mutex mutex_;
   std::map<std::string, Entry> entries_;

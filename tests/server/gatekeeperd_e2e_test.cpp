@@ -341,6 +341,9 @@ TEST(GatekeeperdE2E, DeadlinesHealthMachinesAndConcurrentClients) {
     if (r.method() == "ValidateStep") {
       saw = true;
       EXPECT_GE(r.calls(), 800u);
+      std::uint64_t in_histogram = 0;
+      for (std::uint64_t c : r.histogram_counts()) in_histogram += c;
+      EXPECT_EQ(in_histogram, r.calls());
     }
   EXPECT_TRUE(saw);
 }
