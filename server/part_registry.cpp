@@ -7,19 +7,37 @@
 #include <filesystem>
 
 namespace gk::server {
+namespace {
+
+// The readers pick their format by the file's extension: a stored or staged file gets a link
+// (or copy) with one, removed again when this goes out of scope.
+class NamedByFormat {
+ public:
+  NamedByFormat(const std::string& path, const std::string& format) : path_(path) {
+    if (std::filesystem::path(path).extension() == "." + format) return;
+    path_ = path + "." + format;
+    std::error_code ec;
+    std::filesystem::create_hard_link(path, path_, ec);
+    if (ec) std::filesystem::copy_file(path, path_, ec);
+    owned_ = true;
+  }
+  ~NamedByFormat() {
+    std::error_code ec;
+    if (owned_) std::filesystem::remove(path_, ec);
+  }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  bool owned_ = false;
+};
+
+}  // namespace
 
 Result<TriangleMesh> PartRegistry::read_any(const std::string& path, const std::string& format, double deflection_mm) {
+  const NamedByFormat named(path, format);
   if (is_cad_format(format)) {
-    // OCCT picks its reader by extension: give the file one.
-    std::string named = path;
-    if (std::filesystem::path(path).extension() != "." + format) {
-      named = path + "." + format;
-      std::error_code ec;
-      std::filesystem::create_hard_link(path, named, ec);
-      if (ec) std::filesystem::copy_file(path, named, ec);
-    }
-    auto shape = occt::read_shape_file(named);
-    if (named != path) std::filesystem::remove(named);
+    auto shape = occt::read_shape_file(named.path());
     if (!shape.ok()) return invalid_argument("data", shape.error().message);
     auto meshed = occt::mesh_shape(shape.value(), deflection_mm);
     if (!meshed.ok()) return invalid_argument("data", meshed.error().to_string());
@@ -27,15 +45,7 @@ Result<TriangleMesh> PartRegistry::read_any(const std::string& path, const std::
   }
   mesh_io::ReadOptions options;
   options.build.drop_zero_area_triangles = true;
-  std::string named = path;
-  if (std::filesystem::path(path).extension() != "." + format) {
-    named = path + "." + format;
-    std::error_code ec;
-    std::filesystem::create_hard_link(path, named, ec);
-    if (ec) std::filesystem::copy_file(path, named, ec);
-  }
-  auto mesh = mesh_io::read_mesh_file(named, options);
-  if (named != path) std::filesystem::remove(named);
+  auto mesh = mesh_io::read_mesh_file(named.path(), options);
   if (!mesh.ok()) return invalid_argument("data", mesh.error().message);
   return mesh;
 }
