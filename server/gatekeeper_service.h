@@ -4,6 +4,7 @@
 #pragma once
 
 #include "gatekeeper/v1/gatekeeper.grpc.pb.h"
+#include "server/answer_cache.h"
 #include "server/machine_registry.h"
 #include "server/part_registry.h"
 #include "server/rpc_stats.h"
@@ -90,6 +91,7 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
   PartRegistry& parts_;
   SceneStore& scenes_;
   AuditJobs audits_;
+  AnswerCache answers_;
   ServiceOptions options_;
   RpcStats stats_;
   WorkPool pool_;
