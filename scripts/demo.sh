@@ -5,6 +5,7 @@
 # without --listen, is 127.0.0.1:50051).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+echo "building (log: /tmp/gatekeeper-build.log) ..."
 bash scripts/build.sh > /tmp/gatekeeper-build.log 2>&1 || { tail -40 /tmp/gatekeeper-build.log; exit 1; }
 DATA=$(mktemp -d)
 ./build/server/gatekeeperd --listen 127.0.0.1:0 --data-dir "$DATA" --port-file "$DATA/port" --log-level warn &

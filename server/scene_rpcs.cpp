@@ -1,0 +1,269 @@
+// The scene and audit RPCs of GatekeeperService: scenes a layout tool edits and drags objects
+// through, and interference audits of a scene run as jobs.
+#include "server/gatekeeper_service.h"
+#include "server/proto_convert.h"
+#include "server/rpc_helpers.h"
+
+#include <cmath>
+#include <thread>
+
+namespace gk::server {
+namespace {
+
+Result<StoredPose> to_stored_pose(const pb::Pose& in, const std::string& field) {
+  auto checked = to_pose(in, field);  // validates finiteness and the axis
+  if (!checked.ok()) return checked.error();
+  StoredPose p;
+  p.translation = Vec3(in.translation().x_mm(), in.translation().y_mm(), in.translation().z_mm());
+  if (in.rotation_deg() != 0.0) {
+    p.axis = Vec3(in.rotation_axis().x_mm(), in.rotation_axis().y_mm(), in.rotation_axis().z_mm());
+    p.angle_deg = in.rotation_deg();
+  }
+  return p;
+}
+
+void scene_to_proto(const SceneRecord& scene, pb::SceneInfo* out) {
+  out->set_scene_id(scene.id);
+  out->set_name(scene.name);
+  for (const auto& [id, o] : scene.objects) {
+    pb::SceneObject* p = out->add_objects();
+    p->set_object_id(o.id);
+    p->set_name(o.name);
+    p->set_category(o.category);
+    p->set_part_id(o.part_id);
+    to_proto(o.pose.translation, p->mutable_pose()->mutable_translation());
+    to_proto(o.pose.axis, p->mutable_pose()->mutable_rotation_axis());
+    p->mutable_pose()->set_rotation_deg(o.pose.angle_deg);
+  }
+}
+
+pb::AuditState audit_state(AuditStatus s) {
+  switch (s) {
+    case AuditStatus::kRunning: return pb::RUNNING;
+    case AuditStatus::kDone: return pb::DONE;
+    case AuditStatus::kCancelled: return pb::CANCELLED;
+    case AuditStatus::kFailed: return pb::FAILED;
+  }
+  return pb::FAILED;
+}
+
+void progress_to_proto(const std::string& job_id, const AuditSnapshot& s, pb::AuditProgress* out) {
+  out->set_job_id(job_id);
+  out->set_state(audit_state(s.status));
+  out->set_pairs_total(s.pairs_total);
+  out->set_pairs_done(s.pairs_done);
+  out->set_clashes(s.clashes.size());
+  out->set_elapsed_s(s.elapsed_s);
+  out->set_eta_s(s.eta_s);
+  out->set_message(s.message);
+}
+
+// The drag stream: each move is stored and answered with its contacts before the next is read.
+class DragReactor final : public grpc::ServerBidiReactor<pb::MoveObjectRequest, pb::MoveResult> {
+ public:
+  explicit DragReactor(GatekeeperService& service) : service_(service) { StartRead(&request_); }
+  void OnReadDone(bool ok) override {
+    if (!ok) return Finish(grpc::Status::OK);  // the client is done dragging
+    const auto t0 = Clock::now();
+    reply_.Clear();
+    const grpc::Status s = service_.move(request_, &reply_);
+    service_.stats().record("DragObject.move", us_since(t0), !s.ok());
+    if (!s.ok()) return Finish(s);
+    StartWrite(&reply_);
+  }
+  void OnWriteDone(bool ok) override {
+    if (!ok) return Finish({grpc::StatusCode::CANCELLED, "the client went away"});
+    StartRead(&request_);
+  }
+  void OnDone() override { delete this; }
+
+ private:
+  GatekeeperService& service_;
+  pb::MoveObjectRequest request_;
+  pb::MoveResult reply_;
+};
+
+// Streams an audit's progress until it ends; the job itself runs whether or not anyone watches.
+class WatchReactor final : public grpc::ServerWriteReactor<pb::AuditProgress> {
+ public:
+  WatchReactor(std::shared_ptr<AuditJob> job, std::string job_id, grpc::CallbackServerContext* ctx)
+      : job_(std::move(job)), id_(std::move(job_id)), ctx_(ctx) {
+    next();
+  }
+  void OnWriteDone(bool ok) override {
+    if (!ok) return Finish({grpc::StatusCode::CANCELLED, "the client went away"});
+    if (last_.status != AuditStatus::kRunning) return Finish(grpc::Status::OK);
+    next();
+  }
+  void OnDone() override {
+    if (waiter_.joinable()) waiter_.join();
+    delete this;
+  }
+
+ private:
+  // Waits for progress off the callback threads, then writes it.
+  void next() {
+    if (waiter_.joinable()) waiter_.join();
+    waiter_ = std::thread([this] {
+      last_ = first_ ? job_->snapshot() : job_->wait_for_change(seen_done_, seen_status_, std::chrono::milliseconds(200));
+      first_ = false;
+      seen_done_ = last_.pairs_done;
+      seen_status_ = last_.status;
+      progress_.Clear();
+      progress_to_proto(id_, last_, &progress_);
+      if (ctx_->IsCancelled()) return Finish({grpc::StatusCode::CANCELLED, "cancelled"});
+      StartWrite(&progress_);
+    });
+  }
+
+  std::shared_ptr<AuditJob> job_;
+  std::string id_;
+  grpc::CallbackServerContext* ctx_;
+  std::thread waiter_;
+  AuditSnapshot last_;
+  bool first_ = true;
+  unsigned long long seen_done_ = 0;
+  AuditStatus seen_status_ = AuditStatus::kRunning;
+  pb::AuditProgress progress_;
+};
+
+}  // namespace
+
+grpc::ServerUnaryReactor* GatekeeperService::CreateScene(grpc::CallbackServerContext* ctx, const pb::CreateSceneRequest* request,
+                                                         pb::SceneInfo* response) {
+  const auto t0 = Clock::now();
+  auto scene = scenes_.create(request->name());
+  if (!scene.ok()) return finish(ctx, stats_, "CreateScene", t0, to_status(scene.error()));
+  scene_to_proto(scene.value(), response);
+  return finish(ctx, stats_, "CreateScene", t0, grpc::Status::OK);
+}
+
+grpc::Status GatekeeperService::move(const pb::MoveObjectRequest& request, pb::MoveResult* response) {
+  const auto t0 = Clock::now();
+  auto pose = to_stored_pose(request.pose(), "pose");
+  if (!pose.ok()) return to_status(pose.error());
+  auto moved = scenes_.move(request.scene_id(), request.object_id(), pose.value());
+  if (!moved.ok()) return to_status(moved.error());
+  auto scene = scenes_.get(request.scene_id());
+  if (!scene.ok()) return to_status(scene.error());
+  auto outcome = object_contacts(scene.value(), request.object_id(), request.clearance_mm(), parts_);
+  if (!outcome.ok()) return to_status(outcome.error());
+  response->set_object_id(request.object_id());
+  response->set_verdict(to_proto(outcome.value().verdict));
+  response->set_candidates(outcome.value().candidates);
+  for (const ObjectContactResult& c : outcome.value().contacts) {
+    pb::ObjectContact* o = response->add_contacts();
+    o->set_other_object_id(c.other);
+    o->set_verdict(to_proto(c.verdict));
+    o->set_distance_mm(c.distance_mm);
+    to_proto(c.point, o->mutable_point());
+    to_proto(c.other_point, o->mutable_other_point());
+  }
+  response->set_elapsed_us(us_since(t0));
+  return grpc::Status::OK;
+}
+
+grpc::ServerUnaryReactor* GatekeeperService::PutObject(grpc::CallbackServerContext* ctx, const pb::PutObjectRequest* request,
+                                                       pb::MoveResult* response) {
+  const auto t0 = Clock::now();
+  const pb::SceneObject& in = request->object();
+  auto part = parts_.store().get(in.part_id());
+  if (!part.ok()) return finish(ctx, stats_, "PutObject", t0, to_status(Error{part.error().code, "object.part_id", part.error().message}));
+  auto pose = to_stored_pose(in.pose(), "object.pose");
+  if (!pose.ok()) return finish(ctx, stats_, "PutObject", t0, to_status(pose.error()));
+  auto stored = scenes_.put(request->scene_id(), {in.object_id(), in.name(), in.category(), in.part_id(), pose.value()});
+  if (!stored.ok()) return finish(ctx, stats_, "PutObject", t0, to_status(stored.error()));
+  pb::MoveObjectRequest as_move;
+  as_move.set_scene_id(request->scene_id());
+  as_move.set_object_id(stored.value().id);
+  *as_move.mutable_pose() = in.pose();
+  as_move.set_clearance_mm(request->clearance_mm());
+  return finish(ctx, stats_, "PutObject", t0, move(as_move, response));
+}
+
+grpc::ServerUnaryReactor* GatekeeperService::MoveObject(grpc::CallbackServerContext* ctx, const pb::MoveObjectRequest* request,
+                                                        pb::MoveResult* response) {
+  const auto t0 = Clock::now();
+  return finish(ctx, stats_, "MoveObject", t0, move(*request, response));
+}
+
+grpc::ServerBidiReactor<pb::MoveObjectRequest, pb::MoveResult>* GatekeeperService::DragObject(grpc::CallbackServerContext*) {
+  return new DragReactor(*this);
+}
+
+grpc::ServerUnaryReactor* GatekeeperService::DeleteObject(grpc::CallbackServerContext* ctx, const pb::DeleteObjectRequest* request,
+                                                          pb::SceneInfo* response) {
+  const auto t0 = Clock::now();
+  auto scene = scenes_.remove(request->scene_id(), request->object_id());
+  if (!scene.ok()) return finish(ctx, stats_, "DeleteObject", t0, to_status(scene.error()));
+  scene_to_proto(scene.value(), response);
+  return finish(ctx, stats_, "DeleteObject", t0, grpc::Status::OK);
+}
+
+grpc::ServerUnaryReactor* GatekeeperService::GetScene(grpc::CallbackServerContext* ctx, const pb::GetSceneRequest* request,
+                                                      pb::SceneInfo* response) {
+  const auto t0 = Clock::now();
+  auto scene = scenes_.get(request->scene_id());
+  if (!scene.ok()) return finish(ctx, stats_, "GetScene", t0, to_status(scene.error()));
+  scene_to_proto(scene.value(), response);
+  return finish(ctx, stats_, "GetScene", t0, grpc::Status::OK);
+}
+
+grpc::ServerUnaryReactor* GatekeeperService::StartAudit(grpc::CallbackServerContext* ctx, const pb::StartAuditRequest* request,
+                                                        pb::AuditJob* response) {
+  const auto t0 = Clock::now();
+  if (!std::isfinite(request->clearance_mm()) || request->clearance_mm() < 0.0)
+    return finish(ctx, stats_, "StartAudit", t0, {grpc::StatusCode::INVALID_ARGUMENT, "clearance_mm: must be >= 0"});
+  auto scene = scenes_.get(request->scene_id());
+  if (!scene.ok()) return finish(ctx, stats_, "StartAudit", t0, to_status(scene.error()));
+  auto job = std::make_shared<AuditJob>(scene.value(), request->clearance_mm());
+  PartRegistry* parts = &parts_;
+  if (!pool_.try_submit([job, parts] { job->run(*parts); }))
+    return finish(ctx, stats_, "StartAudit", t0, {grpc::StatusCode::RESOURCE_EXHAUSTED, "audit queue full: retry later"});
+  response->set_job_id(audits_.add(job));
+  return finish(ctx, stats_, "StartAudit", t0, grpc::Status::OK);
+}
+
+grpc::ServerWriteReactor<pb::AuditProgress>* GatekeeperService::WatchAudit(grpc::CallbackServerContext* ctx,
+                                                                          const pb::WatchAuditRequest* request) {
+  auto job = audits_.get(request->job_id());
+  if (!job.ok()) {
+    struct Refused : grpc::ServerWriteReactor<pb::AuditProgress> {
+      explicit Refused(const grpc::Status& s) { Finish(s); }
+      void OnDone() override { delete this; }
+    };
+    return new Refused(to_status(job.error()));
+  }
+  return new WatchReactor(job.value(), request->job_id(), ctx);
+}
+
+grpc::ServerUnaryReactor* GatekeeperService::CancelAudit(grpc::CallbackServerContext* ctx, const pb::CancelAuditRequest* request,
+                                                         pb::AuditProgress* response) {
+  const auto t0 = Clock::now();
+  auto job = audits_.get(request->job_id());
+  if (!job.ok()) return finish(ctx, stats_, "CancelAudit", t0, to_status(job.error()));
+  job.value()->cancel();
+  progress_to_proto(request->job_id(), job.value()->snapshot(), response);
+  return finish(ctx, stats_, "CancelAudit", t0, grpc::Status::OK);
+}
+
+grpc::ServerUnaryReactor* GatekeeperService::GetAuditReport(grpc::CallbackServerContext* ctx,
+                                                            const pb::GetAuditReportRequest* request, pb::AuditReport* response) {
+  const auto t0 = Clock::now();
+  auto job = audits_.get(request->job_id());
+  if (!job.ok()) return finish(ctx, stats_, "GetAuditReport", t0, to_status(job.error()));
+  const AuditSnapshot snapshot = job.value()->snapshot();
+  progress_to_proto(request->job_id(), snapshot, response->mutable_progress());
+  for (const ClashRecord& c : snapshot.clashes) {
+    pb::Clash* out = response->add_clashes();
+    out->set_object_a(c.a);
+    out->set_object_b(c.b);
+    out->set_verdict(to_proto(c.verdict));
+    out->set_distance_mm(c.distance_mm);
+    to_proto(c.point, out->mutable_point());
+    out->set_contact_pairs(c.contact_pairs);
+  }
+  return finish(ctx, stats_, "GetAuditReport", t0, grpc::Status::OK);
+}
+
+}  // namespace gk::server
