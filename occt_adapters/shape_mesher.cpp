@@ -13,7 +13,9 @@
 #include <TopoDS.hxx>
 #include <TopoDS_Face.hxx>
 
+#include <array>
 #include <cmath>
+#include <map>
 #include <string>
 
 namespace gk::occt {
@@ -26,6 +28,7 @@ Result<MeshedShape> mesh_shape(const Shape& shape, double deflection_mm, double 
   std::vector<Vec3> vertices;
   std::vector<TriangleMesh::Face> faces;
   std::vector<int> face_ids;
+  std::map<std::array<double, 3>, std::uint32_t> vertex_of_point;
   auto ran = guarded("shape", "meshing", [&] {
     const TopoDS_Shape copy = BRepBuilderAPI_Copy(shape.impl().shape, true, false).Shape();
     BRepMesh_IncrementalMesh mesher(copy, deflection_mm, false, angular_deg * M_PI / 180.0, false);
@@ -37,17 +40,22 @@ Result<MeshedShape> mesh_shape(const Shape& shape, double deflection_mm, double 
       const Handle(Poly_Triangulation) tri = BRep_Tool::Triangulation(face, location);
       if (tri.IsNull()) continue;
       const gp_Trsf trsf = location.Transformation();
-      const auto base = static_cast<std::uint32_t>(vertices.size());
+      // Faces share the nodes of their common edges: the same point gets one vertex, so a closed
+      // shape gives a closed mesh.
+      std::vector<std::uint32_t> index(tri->NbNodes() + 1);
       for (int n = 1; n <= tri->NbNodes(); ++n) {
         const gp_Pnt p = tri->Node(n).Transformed(trsf);
-        vertices.emplace_back(p.X(), p.Y(), p.Z());
+        const std::array<double, 3> key = {p.X(), p.Y(), p.Z()};
+        auto [it, fresh] = vertex_of_point.emplace(key, static_cast<std::uint32_t>(vertices.size()));
+        if (fresh) vertices.emplace_back(p.X(), p.Y(), p.Z());
+        index[n] = it->second;
       }
       const bool reversed = face.Orientation() == TopAbs_REVERSED;
       for (int t = 1; t <= tri->NbTriangles(); ++t) {
         int a, b, c;
         tri->Triangle(t).Get(a, b, c);
         if (reversed) std::swap(b, c);
-        faces.push_back({base + a - 1, base + b - 1, base + c - 1});
+        faces.push_back({index[a], index[b], index[c]});
         face_ids.push_back(f);
       }
     }

@@ -1,6 +1,7 @@
 // OCCT adapters on real files and shapes: import with clear errors, meshing with face ids, swept
 // solids with their analytic volumes, and exact distance and common volume.
 #include "kernel/mesh_bvh.h"
+#include "kernel/interference_volume.h"
 #include "kernel/mesh_distance.h"
 #include "occt_adapters/exact_measures.h"
 #include "occt_adapters/shape_builders.h"
@@ -74,6 +75,8 @@ TEST(ShapeMesher, KeepsFaceIdsAndStaysWithinTheDeflection) {
     ASSERT_TRUE(meshed.ok()) << meshed.error().to_string();
     const MeshedShape& m = meshed.value();
     ASSERT_EQ(m.face_of_triangle.size(), m.mesh.triangle_count());
+    // Faces share their edges' nodes: the solid's tessellation is closed.
+    EXPECT_TRUE(m.mesh.is_closed_oriented()) << m.mesh.report().boundary_edges << " boundary edges";
     for (int id : m.face_of_triangle) {
       EXPECT_GE(id, 1);
       EXPECT_LE(id, shape.face_count());
@@ -143,6 +146,20 @@ TEST(ExactMeasures, BoxDistanceAndCommonVolumeAreAnalytic) {
   auto c = make_box(Vec3(8, 8, 8), Vec3(12, 13, 14)).value();
   EXPECT_NEAR(exact_distance(a, c).value().distance_mm, 0.0, 1e-12);
   EXPECT_NEAR(interference_volume(a, c).value(), 2.0 * 2.0 * 2.0, 1e-9);
+}
+
+TEST(ExactMeasures, RayCastMeshVolumeMatchesTheBooleanCommon) {
+  // A box turned 30 degrees about z and tilted, cutting an axis-aligned one.
+  auto a = make_box(Vec3(0, 0, 0), Vec3(10, 10, 10)).value();
+  const RigidTransform turn = RigidTransform::from_axis_angle(Vec3(1, 2, 5), 0.5, Vec3(6, 4, 3));
+  auto b = place(make_box(Vec3(0, 0, 0), Vec3(8, 6, 7)).value(), turn).value();
+  const double exact = interference_volume(a, b).value();
+  ASSERT_GT(exact, 10.0);
+  const auto mesh_a = MeshBvh::build(testing::share(mesh_shape(a, 0.01).value().mesh)).value();
+  const auto mesh_b = MeshBvh::build(testing::share(testing::box_mesh(Vec3(0, 0, 0), Vec3(8, 6, 7)))).value();
+  const VolumeEstimate rays = gk::interference_volume(*mesh_a, {}, *mesh_b, turn, 512).value();
+  // Midpoint rule on a 512 x 512 grid over the overlap: 0.5 % here.
+  EXPECT_NEAR(rays.volume_mm3, exact, 0.005 * exact);
 }
 
 TEST(ExactMeasures, KernelMeshDistanceMatchesBRepWithinTheDeflection) {

@@ -1,0 +1,80 @@
+#include "kernel/contact_regions.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <unordered_map>
+
+namespace gk {
+namespace {
+
+struct UnionFind {
+  std::vector<std::size_t> parent;
+  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  std::size_t find(std::size_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void join(std::size_t a, std::size_t b) { parent[find(a)] = find(b); }
+};
+
+}  // namespace
+
+std::vector<ContactRegion> group_into_regions(const std::vector<ProximityPair>& pairs, double merge_mm) {
+  UnionFind sets(pairs.size());
+  // Shared triangles.
+  std::unordered_map<std::uint32_t, std::size_t> first_with_a, first_with_b;
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    auto [ia, new_a] = first_with_a.emplace(pairs[i].triangle_a, i);
+    if (!new_a) sets.join(i, ia->second);
+    auto [ib, new_b] = first_with_b.emplace(pairs[i].triangle_b, i);
+    if (!new_b) sets.join(i, ib->second);
+  }
+  // Nearby witnesses, through a hash grid of cell merge_mm: neighbours are in adjacent cells.
+  if (merge_mm > 0.0 && std::isfinite(merge_mm)) {
+    auto cell_of = [merge_mm](const Vec3& p) {
+      return Eigen::Vector3i(static_cast<int>(std::floor(p.x() / merge_mm)), static_cast<int>(std::floor(p.y() / merge_mm)),
+                             static_cast<int>(std::floor(p.z() / merge_mm)));
+    };
+    auto key = [](const Eigen::Vector3i& c) {
+      return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.x())) * 73856093ull) ^
+             (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.y())) * 19349663ull) ^
+             (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.z())) * 83492791ull);
+    };
+    std::unordered_multimap<std::uint64_t, std::size_t> grid;
+    for (std::size_t i = 0; i < pairs.size(); ++i) grid.emplace(key(cell_of(pairs[i].point_a)), i);
+    for (std::size_t i = 0; i < pairs.size(); ++i) {
+      const Eigen::Vector3i c = cell_of(pairs[i].point_a);
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            auto range = grid.equal_range(key(c + Eigen::Vector3i(dx, dy, dz)));
+            for (auto it = range.first; it != range.second; ++it)
+              if ((pairs[it->second].point_a - pairs[i].point_a).norm() <= merge_mm) sets.join(i, it->second);
+          }
+    }
+  }
+  std::unordered_map<std::size_t, std::size_t> region_of_root;
+  std::vector<ContactRegion> regions;
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    const std::size_t root = sets.find(i);
+    auto [it, fresh] = region_of_root.emplace(root, regions.size());
+    if (fresh) {
+      regions.emplace_back();
+      regions.back().min_distance_mm = std::numeric_limits<double>::infinity();
+    }
+    ContactRegion& r = regions[it->second];
+    r.pairs.push_back(pairs[i]);
+    r.bounds.extend(pairs[i].point_a);
+    if (pairs[i].distance_mm < r.min_distance_mm) {
+      r.min_distance_mm = pairs[i].distance_mm;
+      r.point_a = pairs[i].point_a;
+      r.point_b = pairs[i].point_b;
+    }
+  }
+  std::sort(regions.begin(), regions.end(),
+            [](const ContactRegion& x, const ContactRegion& y) { return x.min_distance_mm < y.min_distance_mm; });
+  return regions;
+}
+
+}  // namespace gk

@@ -1,0 +1,88 @@
+// Contact regions, penetration depth and interference volume against analytic answers.
+#include "kernel/contact_regions.h"
+#include "kernel/interference_volume.h"
+#include "kernel/penetration_depth.h"
+#include "tests/support/random_meshes.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace gk {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+std::shared_ptr<MeshBvh> box(const Vec3& lo, const Vec3& hi) {
+  return MeshBvh::build(testing::share(testing::box_mesh(lo, hi))).value();
+}
+
+TEST(ContactRegions, PairsSharingTrianglesOrNearbyWitnessesFormOneRegion) {
+  // A big box with two small boxes near two different faces: two regions.
+  const auto a = box(Vec3(0, 0, 0), Vec3(100, 100, 100));
+  const auto near_x = box(Vec3(100.5, 40, 40), Vec3(110, 60, 60));
+  const auto near_y = box(Vec3(40, 100.25, 40), Vec3(60, 110, 60));
+  std::vector<ProximityPair> pairs = pairs_within(*a, {}, *near_x, {}, 1.0).value().pairs;
+  const ProximityResult second = pairs_within(*a, {}, *near_y, {}, 1.0).value();
+  for (ProximityPair p : second.pairs) {
+    p.triangle_b += 1000;  // a different mesh B: keep its triangle ids apart
+    pairs.push_back(p);
+  }
+  ASSERT_GT(pairs.size(), 2u);
+  const auto regions = group_into_regions(pairs, 5.0);
+  ASSERT_EQ(regions.size(), 2u);
+  EXPECT_NEAR(regions[0].min_distance_mm, 0.25, 1e-12);  // ordered by distance
+  EXPECT_NEAR(regions[1].min_distance_mm, 0.5, 1e-12);
+  EXPECT_EQ(regions[0].pairs.size() + regions[1].pairs.size(), pairs.size());
+  EXPECT_NEAR((regions[0].point_a - regions[0].point_b).norm(), 0.25, 1e-12);
+  EXPECT_TRUE(group_into_regions({}, 5.0).empty());
+}
+
+TEST(PenetrationDepth, AlongAxesOfOverlappingBoxesIsAnalytic) {
+  const auto a = box(Vec3(0, 0, 0), Vec3(10, 10, 10));
+  const auto b = box(Vec3(0, 0, 0), Vec3(10, 2, 2));
+  const RigidTransform pose_b = RigidTransform::from_translation(Vec3(8, 2, 2));  // B spans x [8, 18]
+  // Tolerance: the contact resolution (1e-6 mm) plus rounding.
+  EXPECT_NEAR(penetration_along(*a, {}, *b, pose_b, Vec3::UnitX()).value().depth_mm, 2.0, 1e-5);
+  EXPECT_NEAR(penetration_along(*a, {}, *b, pose_b, -Vec3::UnitX()).value().depth_mm, 18.0, 1e-5);
+  EXPECT_NEAR(penetration_along(*a, {}, *b, pose_b, Vec3::UnitY()).value().depth_mm, 8.0, 1e-5);
+  // Apart: nothing to do.
+  EXPECT_EQ(penetration_along(*a, {}, *b, RigidTransform::from_translation(Vec3(20, 0, 0)), Vec3::UnitX()).value().depth_mm, 0.0);
+  // Contained: the way out.
+  const auto inner = box(Vec3(4, 4, 4), Vec3(5, 5, 5));
+  EXPECT_NEAR(penetration_along(*a, {}, *inner, {}, Vec3::UnitX()).value().depth_mm, 6.0, 1e-5);
+  EXPECT_FALSE(penetration_along(*a, {}, *b, pose_b, Vec3::Zero()).ok());
+}
+
+TEST(PenetrationDepth, TheVectorIsAnUpperBoundWithinTheSamplingAngle) {
+  const auto a = box(Vec3(0, 0, 0), Vec3(10, 10, 10));
+  const auto b = box(Vec3(0, 0, 0), Vec3(10, 6, 6));
+  const RigidTransform pose_b = RigidTransform::from_translation(Vec3(8, 2, 2));  // true depth: 2 along +x
+  const DepthVector v = penetration_vector(*a, {}, *b, pose_b, 162).value();
+  EXPECT_GE(v.depth_mm, 2.0 - 1e-5);
+  EXPECT_LE(v.depth_mm, 2.0 / std::cos(0.5 * v.max_angle_between_samples_deg * kPi / 180.0) + 1e-5);
+  EXPECT_GT(v.direction.x(), 0.9);
+}
+
+TEST(InterferenceVolume, AxisAlignedBoxesAreExactAndSpheresMatchTheLens) {
+  const auto a = box(Vec3(0, 0, 0), Vec3(10, 10, 10));
+  const auto b = box(Vec3(8, 2, 2), Vec3(18, 4, 4));
+  EXPECT_NEAR(interference_volume(*a, {}, *b, {}, 64).value().volume_mm3, 8.0, 1e-9);  // 2 x 2 x 2
+  EXPECT_EQ(interference_volume(*a, {}, *b, RigidTransform::from_translation(Vec3(20, 0, 0))).value().volume_mm3, 0.0);
+  // Two R10 spheres (subdivided octahedra, 8192 triangles) 12 apart: lens pi (4R + d)(2R - d)^2 / 12.
+  testing::Rng rng(1);
+  const auto s1 = MeshBvh::build(testing::share(testing::random_closed_blob(rng, 5, 10.0, 0.0, Vec3::Zero()))).value();
+  const auto s2 = MeshBvh::build(testing::share(testing::random_closed_blob(rng, 5, 10.0, 0.0, Vec3(12, 0, 0)))).value();
+  const double lens = kPi * (40.0 + 12.0) * 8.0 * 8.0 / 12.0;
+  const VolumeEstimate v = interference_volume(*s1, {}, *s2, {}, 256).value();
+  EXPECT_NEAR(v.volume_mm3, lens, 0.01 * lens);  // tolerance: the spheres are polyhedra (1 %)
+  EXPECT_GT(v.rays, 1000);
+  // Open meshes have no inside: a clear error instead of a number.
+  const auto soup = MeshBvh::build(testing::share(testing::random_soup(rng, 20, 5.0, 2.0))).value();
+  auto open = interference_volume(*soup, {}, *a, {});
+  ASSERT_FALSE(open.ok());
+  EXPECT_EQ(open.error().field, "a");
+}
+
+}  // namespace
+}  // namespace gk
