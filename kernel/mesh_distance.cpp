@@ -101,7 +101,7 @@ Result<DistanceResult> distance(const MeshBvh& a, const RigidTransform& pose_a, 
 }
 
 Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
-                                     const RigidTransform& pose_b, double delta_mm) {
+                                     const RigidTransform& pose_b, double delta_mm, std::size_t max_pairs) {
   if (!(delta_mm >= 0.0) || !std::isfinite(delta_mm))
     return invalid_argument("delta_mm", "must be a finite, non-negative distance");
   auto made = MeshPairFrame::make(a, pose_a, b, pose_b);
@@ -112,7 +112,7 @@ Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pos
   std::array<std::pair<int, int>, 2 * 64 + 4> stack;
   int top = 0;
   stack[top++] = {0, 0};
-  while (top > 0) {
+  while (top > 0 && !result.truncated) {
     const auto [na, nb] = stack[--top];
     ++result.stats.node_pairs_tested;
     if (frame.pair_lower_bound(na, nb) > delta_mm) continue;
@@ -124,6 +124,10 @@ Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pos
           ++result.stats.triangle_pairs_tested;
           const TriangleDistance d = triangle_distance(a.ordered_triangle(ka), tb, std::nextafter(delta_mm, 1e300));
           if (!d.bounded_only && d.distance <= delta_mm) {
+            if (result.pairs.size() >= max_pairs) {
+              result.truncated = true;
+              break;
+            }
             result.pairs.push_back({a.mesh_triangle_index(ka), b.mesh_triangle_index(kb), d.distance,
                                     frame.to_world(d.on_p), frame.to_world(d.on_q)});
           }

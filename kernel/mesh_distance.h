@@ -45,11 +45,14 @@ struct ProximityPair {
 
 struct ProximityResult {
   std::vector<ProximityPair> pairs;  // ordered by triangle ids
+  bool truncated = false;            // max_pairs was reached: the list is incomplete
   QueryStats stats;
 };
 
-// Every triangle pair at distance <= delta_mm (touching and intersecting pairs included).
+// Every triangle pair at distance <= delta_mm (touching and intersecting pairs included), up to
+// max_pairs of them.
 Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
-                                     const RigidTransform& pose_b, double delta_mm);
+                                     const RigidTransform& pose_b, double delta_mm,
+                                     std::size_t max_pairs = std::numeric_limits<std::size_t>::max());
 
 }  // namespace gk

@@ -1,6 +1,9 @@
 #include "server/gatekeeper_service.h"
 
+#include "kernel/contact_regions.h"
 #include "kernel/contact_verdict.h"
+#include "kernel/interference_volume.h"
+#include "kernel/penetration_depth.h"
 #include "kernel/mesh_distance.h"
 #include "server/proto_convert.h"
 #include "server/rpc_helpers.h"
@@ -9,6 +12,7 @@
 #include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <thread>
@@ -213,9 +217,50 @@ grpc::Status GatekeeperService::clearance(const pb::ClearanceQueryRequest& reque
     response->set_triangle_a(v.contacts.front().triangle_a);
     response->set_triangle_b(v.contacts.front().triangle_b);
   }
-  auto near = pairs_within(*a.value()->bvh, pa.value(), *b.value()->bvh, pb_.value(), request.safety_gap_mm());
+  constexpr std::size_t kMaxPairs = 100000;
+  auto near = pairs_within(*a.value()->bvh, pa.value(), *b.value()->bvh, pb_.value(), request.safety_gap_mm(), kMaxPairs);
   if (!near.ok()) return to_status(near.error());
   response->set_pairs_within_gap(static_cast<std::uint32_t>(near.value().pairs.size()));
+  response->set_pairs_truncated(near.value().truncated);
+  const double merge = request.region_merge_mm() > 0.0 ? request.region_merge_mm() : 10.0;
+  for (const ContactRegion& r : group_into_regions(near.value().pairs, merge)) {
+    pb::ContactRegion* out = response->add_regions();
+    out->set_min_distance_mm(r.min_distance_mm);
+    to_proto(r.point_a, out->mutable_point_a());
+    to_proto(r.point_b, out->mutable_point_b());
+    out->set_triangle_pairs(static_cast<std::uint32_t>(r.pairs.size()));
+    to_proto(r.bounds.min, out->mutable_bounds_min());
+    to_proto(r.bounds.max, out->mutable_bounds_max());
+  }
+  // Triangle distances are exact up to rounding (a few ulps of the coordinates); a CAD part's
+  // tessellation lies within its deflection of the surface.
+  const Aabb wa = a.value()->mesh->bounds(), wb = b.value()->mesh->bounds();
+  const double scale = std::max({wa.min.cwiseAbs().maxCoeff(), wa.max.cwiseAbs().maxCoeff(), wb.min.cwiseAbs().maxCoeff(),
+                                 wb.max.cwiseAbs().maxCoeff(), pa.value().translation.cwiseAbs().maxCoeff(),
+                                 pb_.value().translation.cwiseAbs().maxCoeff(), 1.0});
+  response->set_error_bound_mm(a.value()->deflection_mm + b.value()->deflection_mm + 1e-12 * scale);
+  const bool interpenetrating = v.verdict == Verdict::kCollision;
+  std::string not_computed;
+  if (interpenetrating && request.compute_depth()) {
+    auto depth = penetration_vector(*a.value()->bvh, pa.value(), *b.value()->bvh, pb_.value(), 162, 1e-4);
+    if (depth.ok()) {
+      to_proto(depth.value().direction, response->mutable_depth_direction());
+      response->set_depth_mm(depth.value().depth_mm);
+      response->set_depth_max_angle_deg(depth.value().max_angle_between_samples_deg);
+    } else {
+      not_computed += "depth: " + depth.error().to_string() + "; ";
+    }
+  }
+  if (interpenetrating && request.compute_volume()) {
+    auto volume = interference_volume(*a.value()->bvh, pa.value(), *b.value()->bvh, pb_.value(), 256);
+    if (volume.ok()) {
+      response->set_interference_volume_mm3(volume.value().volume_mm3);
+      response->set_volume_cell_mm(volume.value().cell_mm);
+    } else {
+      not_computed += "volume: " + volume.error().to_string() + " (an open or non-manifold mesh has no inside)";
+    }
+  }
+  response->set_not_computed(not_computed);
   response->set_gap_violated(v.distance_mm < request.safety_gap_mm() || v.verdict != Verdict::kClear);
   response->set_elapsed_us(us_since(t0));
   return grpc::Status::OK;

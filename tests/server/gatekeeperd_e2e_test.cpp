@@ -246,6 +246,38 @@ TEST(GatekeeperdE2E, ClearanceQueryMatchesTheKernelAndRefusesOverload) {
   EXPECT_EQ(resp.verdict(), pb::CLEAR);
   EXPECT_GT(resp.pairs_within_gap(), 0u);
   EXPECT_TRUE(resp.gap_violated());
+  // Two closed 10 mm cubes overlapping by 2 mm: regions, depth and volume; an open mesh says why
+  // it has no volume.
+  const std::string cube_obj =
+      "v 0 0 0\nv 10 0 0\nv 0 10 0\nv 10 10 0\nv 0 0 10\nv 10 0 10\nv 0 10 10\nv 10 10 10\n"
+      "f 1 3 4\nf 1 4 2\nf 5 6 8\nf 5 8 7\nf 1 2 6\nf 1 6 5\nf 3 7 8\nf 3 8 4\nf 1 5 7\nf 1 7 3\nf 2 4 8\nf 2 8 6\n";
+  pb::PartInfo cube;
+  ASSERT_TRUE(upload(*stub, cube_obj, "obj", &cube).ok());
+  EXPECT_TRUE(cube.closed());
+  pb::ClearanceQueryRequest overlap;
+  overlap.mutable_a()->set_part_id(cube.part_id());
+  overlap.mutable_b()->set_part_id(cube.part_id());
+  overlap.mutable_b()->mutable_pose()->mutable_translation()->set_x_mm(8.0);
+  overlap.set_safety_gap_mm(1.0);
+  overlap.set_compute_depth(true);
+  overlap.set_compute_volume(true);
+  pb::ClearanceQueryResponse deep;
+  grpc::ClientContext octx;
+  ASSERT_TRUE(stub->ClearanceQuery(&octx, overlap, &deep).ok());
+  EXPECT_EQ(deep.verdict(), pb::COLLISION);
+  EXPECT_NEAR(deep.interference_volume_mm3(), 200.0, 1e-6);  // 2 x 10 x 10, exact for axis-aligned boxes
+  EXPECT_GE(deep.depth_mm(), 2.0 - 1e-3);                   // true depth 2 along +x; sampled: an upper bound
+  EXPECT_LE(deep.depth_mm(), 2.0 / std::cos(0.5 * deep.depth_max_angle_deg() * kPi / 180.0) + 1e-3);
+  EXPECT_GE(deep.regions_size(), 1);
+  EXPECT_LT(deep.error_bound_mm(), 1e-6);
+  overlap.mutable_a()->set_part_id(rob.part_id());
+  overlap.mutable_b()->set_part_id(rob.part_id());
+  overlap.mutable_b()->mutable_pose()->mutable_translation()->set_x_mm(300.0);
+  grpc::ClientContext sctx;
+  ASSERT_TRUE(stub->ClearanceQuery(&sctx, overlap, &deep).ok());
+  EXPECT_EQ(deep.verdict(), pb::COLLISION);
+  EXPECT_EQ(deep.interference_volume_mm3(), 0.0);
+  EXPECT_NE(deep.not_computed().find("volume"), std::string::npos) << deep.not_computed();
   // Unknown part and NaN pose.
   req.mutable_a()->set_part_id(std::string(64, 'b'));
   grpc::ClientContext ctx2;
