@@ -4,6 +4,7 @@
 #include "kernel/contact_verdict.h"
 #include "kernel/interference_volume.h"
 #include "kernel/penetration_depth.h"
+#include "occt_adapters/exact_measures.h"
 #include "kernel/mesh_distance.h"
 #include "server/proto_convert.h"
 #include "server/rpc_helpers.h"
@@ -14,6 +15,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <limits>
+#include <set>
 #include <cmath>
 #include <thread>
 
@@ -239,6 +242,41 @@ grpc::Status GatekeeperService::clearance(const pb::ClearanceQueryRequest& reque
                                  wb.max.cwiseAbs().maxCoeff(), pa.value().translation.cwiseAbs().maxCoeff(),
                                  pb_.value().translation.cwiseAbs().maxCoeff(), 1.0});
   response->set_error_bound_mm(a.value()->deflection_mm + b.value()->deflection_mm + 1e-12 * scale);
+  // CAD on both sides, apart: the tessellation may hide the true minimum anywhere the mesh
+  // distance is within both deflections of its minimum; measure those face pairs exactly.
+  if (!a.value()->shape.is_null() && !b.value()->shape.is_null() && v.distance_mm > 0.0 &&
+      v.verdict != Verdict::kCollision) {
+    const double window = v.distance_mm + a.value()->deflection_mm + b.value()->deflection_mm;
+    auto candidates = pairs_within(*a.value()->bvh, pa.value(), *b.value()->bvh, pb_.value(), window, 20000);
+    if (candidates.ok() && !candidates.value().truncated) {
+      std::set<std::pair<int, int>> faces;
+      for (const ProximityPair& p : candidates.value().pairs)
+        faces.insert({a.value()->face_of_triangle[p.triangle_a], b.value()->face_of_triangle[p.triangle_b]});
+      double best = std::numeric_limits<double>::infinity();
+      bool all_measured = faces.size() <= 256;
+      for (const auto& [fa, fb] : faces) {
+        if (!all_measured) break;
+        auto d = occt::face_distance(a.value()->shape, fa, pa.value(), b.value()->shape, fb, pb_.value());
+        if (!d.ok()) {
+          all_measured = false;
+          break;
+        }
+        if (d.value().distance_mm < best) {
+          best = d.value().distance_mm;
+          to_proto(d.value().point_a, response->mutable_point_a());
+          to_proto(d.value().point_b, response->mutable_point_b());
+          response->set_face_a(static_cast<std::uint32_t>(fa));
+          response->set_face_b(static_cast<std::uint32_t>(fb));
+        }
+      }
+      if (all_measured && std::isfinite(best)) {
+        response->set_distance_mm(best);
+        response->set_refined_on_brep(true);
+        response->set_error_bound_mm(1e-6);  // BRepExtrema's precision
+        response->set_gap_violated(best < request.safety_gap_mm());
+      }
+    }
+  }
   const bool interpenetrating = v.verdict == Verdict::kCollision;
   std::string not_computed;
   if (interpenetrating && request.compute_depth()) {
@@ -261,7 +299,7 @@ grpc::Status GatekeeperService::clearance(const pb::ClearanceQueryRequest& reque
     }
   }
   response->set_not_computed(not_computed);
-  response->set_gap_violated(v.distance_mm < request.safety_gap_mm() || v.verdict != Verdict::kClear);
+  if (!response->refined_on_brep()) response->set_gap_violated(v.distance_mm < request.safety_gap_mm() || v.verdict != Verdict::kClear);
   response->set_elapsed_us(us_since(t0));
   return grpc::Status::OK;
 }

@@ -34,13 +34,16 @@ class NamedByFormat {
 
 }  // namespace
 
-Result<TriangleMesh> PartRegistry::read_any(const std::string& path, const std::string& format, double deflection_mm) {
+Result<TriangleMesh> PartRegistry::read_any(const std::string& path, const std::string& format, double deflection_mm,
+                                            occt::Shape* shape_out, std::vector<int>* face_of_triangle) {
   const NamedByFormat named(path, format);
   if (is_cad_format(format)) {
     auto shape = occt::read_shape_file(named.path());
     if (!shape.ok()) return invalid_argument("data", shape.error().message);
     auto meshed = occt::mesh_shape(shape.value(), deflection_mm);
     if (!meshed.ok()) return invalid_argument("data", meshed.error().to_string());
+    if (shape_out) *shape_out = shape.value();
+    if (face_of_triangle) *face_of_triangle = meshed.value().face_of_triangle;
     return std::move(meshed.value().mesh);
   }
   mesh_io::ReadOptions options;
@@ -59,9 +62,10 @@ Result<std::shared_ptr<const LoadedPart>> PartRegistry::load(const std::string& 
     auto it = loaded_.find({id, key_deflection});
     if (it != loaded_.end()) return it->second;
   }
-  auto mesh = read_any(store_.path_of(record.value()), record.value().format, deflection_mm);
-  if (!mesh.ok()) return mesh.error();
   auto part = std::make_shared<LoadedPart>();
+  auto mesh = read_any(store_.path_of(record.value()), record.value().format, deflection_mm, &part->shape,
+                       &part->face_of_triangle);
+  if (!mesh.ok()) return mesh.error();
   part->record = record.value();
   part->mesh = std::make_shared<const TriangleMesh>(std::move(mesh).value());
   auto bvh = MeshBvh::build(part->mesh);

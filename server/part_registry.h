@@ -2,6 +2,7 @@
 #pragma once
 
 #include "kernel/mesh_bvh.h"
+#include "occt_adapters/shape.h"
 #include "server/part_store.h"
 
 #include <map>
@@ -16,6 +17,8 @@ struct LoadedPart {
   std::shared_ptr<const TriangleMesh> mesh;
   std::shared_ptr<MeshBvh> bvh;
   double deflection_mm = 0.0;  // CAD parts: the tessellation's deflection; meshes: 0
+  occt::Shape shape;                  // CAD parts: the exact B-Rep
+  std::vector<int> face_of_triangle;  // CAD parts: each triangle's B-Rep face (1-based)
 };
 
 class PartRegistry {
@@ -25,8 +28,10 @@ class PartRegistry {
   // The part's mesh: mesh formats as stored, CAD formats tessellated at deflection_mm.
   Result<std::shared_ptr<const LoadedPart>> load(const std::string& id, double deflection_mm);
 
-  // Reads any supported file into a mesh (used to describe an upload before it is recorded).
-  static Result<TriangleMesh> read_any(const std::string& path, const std::string& format, double deflection_mm);
+  // Reads any supported file into a mesh (used to describe an upload before it is recorded); for
+  // CAD files also the shape and each triangle's face.
+  static Result<TriangleMesh> read_any(const std::string& path, const std::string& format, double deflection_mm,
+                                       occt::Shape* shape = nullptr, std::vector<int>* face_of_triangle = nullptr);
 
   PartStore& store() { return store_; }
 

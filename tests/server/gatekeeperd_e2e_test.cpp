@@ -5,6 +5,9 @@
 #include "kernel/mesh_bvh.h"
 #include "kernel/mesh_distance.h"
 #include "mesh_io/mesh_file_reader.h"
+#include "occt_adapters/exact_measures.h"
+#include "occt_adapters/shape_builders.h"
+#include "occt_adapters/shape_import.h"
 #include "tests/server/daemon_fixture.h"
 #include "tests/support/random_meshes.h"
 
@@ -278,6 +281,28 @@ TEST(GatekeeperdE2E, ClearanceQueryMatchesTheKernelAndRefusesOverload) {
   EXPECT_EQ(deep.verdict(), pb::COLLISION);
   EXPECT_EQ(deep.interference_volume_mm3(), 0.0);
   EXPECT_NE(deep.not_computed().find("volume"), std::string::npos) << deep.not_computed();
+  // Two CAD parts: the distance is refined on the exact faces and matches BRepExtrema on the
+  // whole shapes to 1e-6 mm.
+  const std::string brep = testing::read_file(testing::shared_data("step/occt/Pump_Nut.brep"));
+  pb::PartInfo nut;
+  ASSERT_TRUE(upload(*stub, brep, "brep", &nut).ok());
+  pb::ClearanceQueryRequest cad;
+  cad.mutable_a()->set_part_id(nut.part_id());
+  cad.mutable_b()->set_part_id(nut.part_id());
+  // A copy moved along x by its box diagonal plus 3 mm: apart, with curved faces nearest.
+  const double shift = std::hypot(nut.bounds_max().x_mm() - nut.bounds_min().x_mm(), nut.bounds_max().y_mm() - nut.bounds_min().y_mm(),
+                                  nut.bounds_max().z_mm() - nut.bounds_min().z_mm()) + 3.0;
+  cad.mutable_b()->mutable_pose()->mutable_translation()->set_x_mm(shift);
+  cad.set_safety_gap_mm(1.0);
+  pb::ClearanceQueryResponse refined;
+  grpc::ClientContext rctx;
+  ASSERT_TRUE(stub->ClearanceQuery(&rctx, cad, &refined).ok());
+  ASSERT_TRUE(refined.refined_on_brep()) << refined.verdict() << " d=" << refined.distance_mm() << " pairs=" << refined.pairs_within_gap() << " shift=" << shift;
+  auto shape = occt::read_shape_file(testing::shared_data("step/occt/Pump_Nut.brep")).value();
+  const RigidTransform pose_nut = RigidTransform::from_translation(Vec3(shift, 0, 0));
+  const double exact_d = occt::exact_distance(shape, occt::place(shape, pose_nut).value()).value().distance_mm;
+  EXPECT_NEAR(refined.distance_mm(), exact_d, 1e-6);
+  EXPECT_LE(refined.error_bound_mm(), 1e-6);
   // Unknown part and NaN pose.
   req.mutable_a()->set_part_id(std::string(64, 'b'));
   grpc::ClientContext ctx2;
