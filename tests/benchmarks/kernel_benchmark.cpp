@@ -2,6 +2,8 @@
 //   build/tests/benchmarks/kernel_benchmark [--benchmark_filter=...]
 // Every query is timed on its own; the counters give mean, median and p99 per query in
 // microseconds, and a hash of the answers shows both runs computed the same thing.
+#include "kernel/contact_regions.h"
+#include "kernel/contact_verdict.h"
 #include "kernel/mesh_bvh.h"
 #include "kernel/mesh_collision.h"
 #include "kernel/mesh_distance.h"
@@ -195,6 +197,15 @@ void large(benchmark::State& state, Query query) {
           near_contact_poses(i), false, query);
 }
 
+// A full clearance answer: the verdict (contacts, or distance with witnesses, containment), every
+// triangle pair within a 1 mm safety gap, and those pairs grouped into contact regions.
+double clearance_ours(const Subject& a, const RigidTransform& pa, const Subject& b, const RigidTransform& pb) {
+  const auto v = gk::assess(*a.ours, pa, *b.ours, pb).value();
+  const auto near = gk::pairs_within(*a.ours, pa, *b.ours, pb, 1.0, 100000).value();
+  const auto regions = gk::group_into_regions(near.pairs, 10.0);
+  return v.distance_mm + static_cast<double>(regions.size());
+}
+
 void BM_EnvRob_Collide_Ours(benchmark::State& s) { env_rob(s, collide_ours); }
 void BM_EnvRob_Collide_Fcl(benchmark::State& s) { env_rob(s, collide_fcl); }
 void BM_EnvRob_Distance_Ours(benchmark::State& s) { env_rob(s, distance_ours); }
@@ -203,6 +214,7 @@ void BM_Large_Collide_Ours(benchmark::State& s) { large(s, collide_ours); }
 void BM_Large_Collide_Fcl(benchmark::State& s) { large(s, collide_fcl); }
 void BM_Large_Distance_Ours(benchmark::State& s) { large(s, distance_ours); }
 void BM_Large_Distance_Fcl(benchmark::State& s) { large(s, distance_fcl); }
+void BM_Large_Clearance_Ours(benchmark::State& s) { large(s, clearance_ours); }
 
 // --- build and refit ----------------------------------------------------------------------------
 
@@ -243,6 +255,7 @@ BENCHMARK(BM_Large_Collide_Ours)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)-
 BENCHMARK(BM_Large_Collide_Fcl)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_Large_Distance_Ours)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_Large_Distance_Fcl)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_Large_Clearance_Ours)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_Build_Ours)->Unit(benchmark::kMillisecond)->Iterations(5);
 BENCHMARK(BM_Build_Fcl)->Unit(benchmark::kMillisecond)->Iterations(5);
 BENCHMARK(BM_Refit_Ours)->Unit(benchmark::kMillisecond)->Iterations(20);
