@@ -8,14 +8,6 @@
 namespace gk {
 namespace {
 
-Aabb world_bounds(const MeshBvh& m, const RigidTransform& pose) {
-  const Aabb local = m.root_bounds();
-  Aabb out;
-  for (int k = 0; k < 8; ++k)
-    out.extend(pose.apply(Vec3((k & 1) ? local.max.x() : local.min.x(), (k & 2) ? local.max.y() : local.min.y(),
-                               (k & 4) ? local.max.z() : local.min.z())));
-  return out;
-}
 
 // Parameters t where origin + t * dir crosses the mesh (mesh-local ray), through the BVH.
 void crossings(const MeshBvh& m, const Vec3& origin, const Vec3& dir, std::vector<double>& out) {
@@ -85,7 +77,7 @@ Result<VolumeEstimate> interference_volume(const MeshBvh& a, const RigidTransfor
   if (!pose_a.is_rigid()) return invalid_argument("pose_a", "not a finite rigid transform");
   if (!pose_b.is_rigid()) return invalid_argument("pose_b", "not a finite rigid transform");
   VolumeEstimate out;
-  const Aabb ba = world_bounds(a, pose_a), bb = world_bounds(b, pose_b);
+  const Aabb ba = transformed_box(a.root_bounds(), pose_a), bb = transformed_box(b.root_bounds(), pose_b);
   const Vec3 lo = ba.min.cwiseMax(bb.min), hi = ba.max.cwiseMin(bb.max);
   if (!((hi - lo).array() > 0.0).all()) return out;
   const double dx = (hi.x() - lo.x()) / cells_per_axis, dy = (hi.y() - lo.y()) / cells_per_axis;

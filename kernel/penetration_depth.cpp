@@ -10,14 +10,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-Aabb world_bounds(const MeshBvh& m, const RigidTransform& pose) {
-  const Aabb local = m.root_bounds();
-  Aabb out;
-  for (int k = 0; k < 8; ++k)
-    out.extend(pose.apply(Vec3((k & 1) ? local.max.x() : local.min.x(), (k & 2) ? local.max.y() : local.min.y(),
-                               (k & 4) ? local.max.z() : local.min.z())));
-  return out;
-}
 
 }  // namespace
 
@@ -31,7 +23,7 @@ Result<DepthAlong> penetration_along(const MeshBvh& a, const RigidTransform& pos
   // distance query alone cannot tell containment, so the collide + box test decide it.)
   auto touching = collide(a, pose_a, b, pose_b);
   if (!touching.ok()) return touching.error();
-  const Aabb box_a = world_bounds(a, pose_a), box_b = world_bounds(b, pose_b);
+  const Aabb box_a = transformed_box(a.root_bounds(), pose_a), box_b = transformed_box(b.root_bounds(), pose_b);
   if (!touching.value().colliding && !box_a.overlaps(box_b)) return out;
   // A translation along u that surely separates the boxes.
   double lo_a = std::numeric_limits<double>::infinity(), hi_a = -lo_a, lo_b = lo_a, hi_b = -lo_a;

@@ -1,6 +1,7 @@
 // A rigid motion x -> R x + t in double precision (R orthonormal, det +1).
 #pragma once
 
+#include "kernel/aabb.h"
 #include "kernel/geometry_types.h"
 #include "kernel/tolerances.h"
 
@@ -44,6 +45,15 @@ struct RigidTransform {
 // only where a leaf pair needs them, never all of them.
 inline RigidTransform relative_transform(const RigidTransform& pose_a, const RigidTransform& pose_b) {
   return pose_a.inverse() * pose_b;
+}
+
+// The axis-aligned box around a box moved by a pose (its eight corners moved).
+inline Aabb transformed_box(const Aabb& local, const RigidTransform& pose) {
+  Aabb out;
+  for (int k = 0; k < 8; ++k)
+    out.extend(pose.apply(Vec3((k & 1) ? local.max.x() : local.min.x(), (k & 2) ? local.max.y() : local.min.y(),
+                               (k & 4) ? local.max.z() : local.min.z())));
+  return out;
 }
 
 }  // namespace gk

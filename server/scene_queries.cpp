@@ -14,19 +14,12 @@ struct Placed {
   Aabb box;
 };
 
-Aabb world_box(const Aabb& local, const RigidTransform& pose) {
-  Aabb out;
-  for (int k = 0; k < 8; ++k)
-    out.extend(pose.apply(Vec3((k & 1) ? local.max.x() : local.min.x(), (k & 2) ? local.max.y() : local.min.y(),
-                               (k & 4) ? local.max.z() : local.min.z())));
-  return out;
-}
 
 Result<Placed> place(const SceneObjectRecord& o, PartRegistry& parts) {
   auto part = parts.load(o.part_id, 0.05);
   if (!part.ok()) return Error{part.error().code, "objects[" + o.id + "].part_id", part.error().message};
   const RigidTransform pose = o.pose.transform();
-  return Placed{&o, part.value(), pose, world_box(part.value()->mesh->bounds(), pose)};
+  return Placed{&o, part.value(), pose, transformed_box(part.value()->mesh->bounds(), pose)};
 }
 
 int severity(Verdict v) {

@@ -33,13 +33,6 @@ class OrganBoxSet final : public BVH_Set<double, 3> {
   std::vector<int>* order_;
 };
 
-Aabb transformed_box(const Aabb& local, const RigidTransform& pose) {
-  Aabb out;
-  for (int k = 0; k < 8; ++k)
-    out.extend(pose.apply(Vec3((k & 1) ? local.max.x() : local.min.x(), (k & 2) ? local.max.y() : local.min.y(),
-                               (k & 4) ? local.max.z() : local.min.z())));
-  return out;
-}
 
 }  // namespace
 
