@@ -27,6 +27,17 @@ std::uint64_t mix(std::uint64_t h, std::uint64_t v) {
 
 bool is_bend(StepKind k) { return k == StepKind::kBendUp || k == StepKind::kBendDown; }
 
+// How deep the bodies' vertices (moved by body_pose) reach into the organ's prism, 0 if outside.
+double deepest_inside(const Organ& organ, const RigidTransform& organ_pose, const std::vector<MovingBody>& bodies,
+                      const RigidTransform& body_pose) {
+  const RigidTransform to_organ = organ_pose.inverse() * body_pose;
+  double depth = 0.0;
+  for (const MovingBody& b : bodies)
+    for (const Vec3& p : b.points)
+      depth = std::max(depth, depth_inside_prism(organ.profile_yz, organ.x_min, organ.x_max, to_organ.apply(p)));
+  return depth;
+}
+
 // The B-Rep distance between the plates (moved by `motion_pose`) and the organ's prism.
 Result<double> exact_clearance(const std::vector<Plate>& plates, const RigidTransform& motion_pose, const Organ& organ,
                                const RigidTransform& organ_pose) {
@@ -369,11 +380,7 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
           col.organ = organ.name;
           col.point_mm = hit.value().contacts.front().point;
           col.organ_point_mm = col.point_mm;
-          double depth = 0.0;
-          const RigidTransform to_organ = c.pose.inverse();
-          for (const Vec3& p : b.points)
-            depth = std::max(depth, depth_inside_prism(organ.profile_yz, organ.x_min, organ.x_max, to_organ.apply(p)));
-          col.depth_mm = depth;
+          col.depth_mm = deepest_inside(organ, c.pose, {b}, RigidTransform{});
           answer.collisions.push_back(col);
           answer.verdict = Verdict::kCollision;
           continue;
@@ -455,13 +462,7 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
     col.first_contact_fraction = out.contact_s;
     col.first_contact_deg = std::fabs(full_deg) * out.contact_s;
     // Depth at the end of the step: the deepest moving vertex inside the organ.
-    const RigidTransform end = prep.motion.at(1.0);
-    const RigidTransform to_organ = hit.pose.inverse();
-    double depth = 0.0;
-    for (const MovingBody& b : prep.bodies)
-      for (const Vec3& p : b.points)
-        depth = std::max(depth, depth_inside_prism(organ.profile_yz, organ.x_min, organ.x_max, to_organ.apply(end.apply(p))));
-    col.depth_mm = depth;
+    col.depth_mm = deepest_inside(organ, hit.pose, prep.bodies, prep.motion.at(1.0));
     answer.collisions.push_back(col);
     answer.verdict = Verdict::kCollision;
     answer.reason = out.contact_s == 0.0 ? "already within the required clearance of " + organ.name + " at the start"

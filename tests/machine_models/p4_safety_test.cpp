@@ -52,6 +52,15 @@ RandomBend random_bend(testing::Rng& rng, const MachineModel& model) {
   return r;
 }
 
+// Plates (machine coordinates) as one moving body.
+MovingBody body_of(const std::vector<Plate>& plates) {
+  MovingBody body;
+  TriangleMesh mesh = plates_mesh(plates);
+  body.points = mesh.vertices();
+  body.mesh = MeshBvh::build(std::make_shared<const TriangleMesh>(std::move(mesh))).value();
+  return body;
+}
+
 // The moving body and motion of a bend, built here the way the validator builds them.
 bool bend_body(const MachineModel& model, const RandomBend& r, MovingBody& body, Motion& motion,
                std::vector<Plate>& plates) {
@@ -61,9 +70,7 @@ bool bend_body(const MachineModel& model, const RandomBend& r, MovingBody& body,
   const RigidTransform placement = part_placement(r.part, r.step);
   plates.clear();
   for (const Plate& p : moving) plates.push_back(p.transformed(placement));
-  TriangleMesh mesh = plates_mesh(plates);
-  body.points = mesh.vertices();
-  body.mesh = MeshBvh::build(std::make_shared<const TriangleMesh>(std::move(mesh))).value();
+  body = body_of(plates);
   const double t = r.part.thickness_mm();
   const bool up = r.step.kind == StepKind::kBendUp;
   motion = {true, Vec3(0, 0, up ? t : 0.0), Vec3::UnitX(), (up ? 1.0 : -1.0) * r.step.target_angle_deg * kPi / 180.0,
@@ -138,10 +145,7 @@ TEST(P4Safety, VerticalPrismHullNeverClearsWhatARotationReaches) {
     const RigidTransform placement = part_placement(r.part, place);
     std::vector<Plate> plates;
     for (const Plate& p : r.part.plates()) plates.push_back(p.transformed(placement));
-    MovingBody body;
-    TriangleMesh mesh = plates_mesh(plates);
-    body.points = mesh.vertices();
-    body.mesh = MeshBvh::build(std::make_shared<const TriangleMesh>(std::move(mesh))).value();
+    const MovingBody body = body_of(plates);
     const double angle = (u(rng) < 0.5 ? -1.0 : 1.0) * (10.0 + 170.0 * u(rng));
     const Motion motion{true, Vec3(-300.0 + 600.0 * u(rng), r.state.manipulator_y_mm, 0.0), Vec3::UnitZ(),
                         angle * kPi / 180.0, Vec3::Zero()};
