@@ -1,5 +1,6 @@
 #include "kernel/penetration_depth.h"
 
+#include "kernel/convex_decomposition.h"
 #include "kernel/mesh_collision.h"
 #include "kernel/mesh_distance.h"
 
@@ -9,7 +10,63 @@ namespace gk {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+constexpr int kMaxPiecesPerMesh = 32;
+constexpr int kMaxPieceDirections = 48;
+// Larger meshes are decomposed only where the two boxes overlap (the rest cannot touch).
+constexpr std::size_t kWholeMeshTriangles = 4096;
+// Piece axes closer than this (cosine of 0.25 degrees) to one already taken add nothing.
+constexpr double kSameDirectionCosine = 0.99999048;
 
+// The separating axes of every overlapping pair of convex pieces, deepest first.
+struct PieceAxes {
+  std::vector<Vec3> directions;
+  int pieces_a = 0, pieces_b = 0;
+  double max_concavity_mm = 0.0;
+  bool both_convex_whole = false;  // each mesh is one convex piece covering all of it
+};
+
+Result<PieceAxes> piece_axes(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b, const RigidTransform& pose_b) {
+  const Aabb box_a = transformed_box(a.root_bounds(), pose_a), box_b = transformed_box(b.root_bounds(), pose_b);
+  Aabb overlap{box_a.min.cwiseMax(box_b.min), box_a.max.cwiseMin(box_b.max)};
+  PieceAxes out;
+  if (overlap.empty()) return out;
+  overlap = overlap.expanded(tolerances::kContactMm);
+  DecompositionOptions oa, ob;
+  oa.max_pieces = ob.max_pieces = kMaxPiecesPerMesh;
+  const bool whole_a = a.mesh().triangle_count() <= kWholeMeshTriangles;
+  const bool whole_b = b.mesh().triangle_count() <= kWholeMeshTriangles;
+  if (!whole_a) oa.region = transformed_box(overlap, pose_a.inverse());
+  if (!whole_b) ob.region = transformed_box(overlap, pose_b.inverse());
+  auto da = approximate_convex_decomposition(a.mesh(), oa);
+  if (!da.ok()) return da.error();
+  auto db = approximate_convex_decomposition(b.mesh(), ob);
+  if (!db.ok()) return db.error();
+  out.pieces_a = static_cast<int>(da.value().pieces.size());
+  out.pieces_b = static_cast<int>(db.value().pieces.size());
+  out.max_concavity_mm = std::max(da.value().max_concavity_mm, db.value().max_concavity_mm);
+  std::vector<std::pair<double, Vec3>> found;
+  bool all_edges = true;
+  for (const ConvexPiece& pa : da.value().pieces) {
+    const Aabb wa = transformed_box(pa.bounds, pose_a);
+    for (const ConvexPiece& pb : db.value().pieces) {
+      if (!wa.overlaps(transformed_box(pb.bounds, pose_b))) continue;
+      const ConvexSeparation s = convex_penetration(pa, pose_a, pb, pose_b);
+      all_edges = all_edges && s.edge_axes_tested;
+      if (s.depth_mm > 0.0) found.emplace_back(s.depth_mm, s.direction);
+    }
+  }
+  std::sort(found.begin(), found.end(), [](const auto& l, const auto& r) { return l.first > r.first; });
+  for (const auto& [depth, dir] : found) {
+    bool seen = false;
+    for (const Vec3& d : out.directions) seen = seen || d.dot(dir) > kSameDirectionCosine;
+    if (!seen) out.directions.push_back(dir);
+    if (static_cast<int>(out.directions.size()) >= kMaxPieceDirections) break;
+  }
+  out.both_convex_whole = all_edges && out.pieces_a == 1 && out.pieces_b == 1 && out.max_concavity_mm == 0.0 &&
+                          a.mesh().report().closed && b.mesh().report().closed &&
+                          whole_a && whole_b;
+  return out;
+}
 
 }  // namespace
 
@@ -58,20 +115,31 @@ Result<DepthVector> penetration_vector(const MeshBvh& a, const RigidTransform& p
   if (samples < 6 || samples > 100000) return invalid_argument("samples", "must be in [6, 100000]");
   DepthVector best;
   best.depth_mm = std::numeric_limits<double>::infinity();
+  auto axes = piece_axes(a, pose_a, b, pose_b);
+  if (!axes.ok()) return axes.error();
+  best.pieces_a = axes.value().pieces_a;
+  best.pieces_b = axes.value().pieces_b;
+  best.max_concavity_mm = axes.value().max_concavity_mm;
+  std::vector<Vec3> candidates = axes.value().directions;
+  best.piece_directions = static_cast<int>(candidates.size());
   const double golden = kPi * (3.0 - std::sqrt(5.0));
   for (int i = 0; i < samples; ++i) {
     const double z = 1.0 - 2.0 * (static_cast<double>(i) + 0.5) / samples;
     const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
-    const Vec3 u(r * std::cos(golden * i), r * std::sin(golden * i), z);
-    auto d = penetration_along(a, pose_a, b, pose_b, u, tolerance_mm);
+    candidates.emplace_back(r * std::cos(golden * i), r * std::sin(golden * i), z);
+  }
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    auto d = penetration_along(a, pose_a, b, pose_b, candidates[i], tolerance_mm);
     if (!d.ok()) return d.error();
     ++best.directions_tried;
     if (d.value().depth_mm < best.depth_mm) {
       best.depth_mm = d.value().depth_mm;
-      best.direction = u;
+      best.direction = candidates[i];
+      best.from_piece_axis = static_cast<int>(i) < best.piece_directions;
     }
     if (best.depth_mm == 0.0) break;
   }
+  best.exact = axes.value().both_convex_whole && best.depth_mm > 0.0;
   // A Fibonacci lattice of n points leaves every direction within about sqrt(4 pi / n) radians
   // (times a small constant) of a sample.
   best.max_angle_between_samples_deg = 180.0 / kPi * 2.0 * std::sqrt(4.0 * kPi / samples);

@@ -3,9 +3,15 @@
 //    separates their boxes, B is moved back along the direction by conservative advancement (each
 //    step is the current distance, since a translation moves every point by its length), so the
 //    first contact met is the largest translation at which they still touch;
-//  - as a vector: the smallest of those over sampled directions. That is an upper bound of the
-//    true (minimum-translation) depth; between samples 'angle_deg' apart the true direction can
-//    make it larger by the factor 1 / cos(angle_deg / 2) for convex shapes.
+//  - as a vector: the smallest of those over candidate directions. The candidates are the
+//    separating axes of the overlapping pieces of an approximate convex decomposition of both
+//    meshes (kernel/convex_decomposition: for convex pieces that axis is their exact penetration
+//    direction) plus a Fibonacci lattice over the sphere. Every candidate's depth is measured on
+//    the meshes themselves, so the answer is a certified upper bound: B moved by it is free of A.
+//    For two convex closed meshes the decomposition is one piece each and the answer is the exact
+//    penetration depth; for non-convex parts it can exceed the true minimum when no candidate
+//    points at it (between lattice samples 'angle_deg' apart, by up to 1 / cos(angle_deg / 2) for
+//    locally convex contact).
 #pragma once
 
 #include "kernel/mesh_bvh.h"
@@ -27,10 +33,15 @@ struct DepthVector {
   Vec3 direction = Vec3::Zero();  // unit; the translation of B is depth_mm * direction
   double depth_mm = 0.0;
   int directions_tried = 0;
+  int piece_directions = 0;       // of which from the convex pieces' separating axes
+  bool from_piece_axis = false;   // the best direction came from a piece's separating axis
+  int pieces_a = 0, pieces_b = 0;
+  double max_concavity_mm = 0.0;  // the decomposition's deepest piece (either mesh)
+  bool exact = false;             // both meshes convex and closed: depth_mm is the true minimum
   double max_angle_between_samples_deg = 0.0;
 };
 
-// The smallest depth over `samples` directions spread over the sphere (a Fibonacci lattice).
+// The smallest depth over the convex pieces' axes and `samples` lattice directions.
 Result<DepthVector> penetration_vector(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
                                        const RigidTransform& pose_b, int samples = 162, double tolerance_mm = 1e-6);
 
