@@ -121,6 +121,12 @@ Result<DepthVector> penetration_vector(const MeshBvh& a, const RigidTransform& p
   best.pieces_b = axes.value().pieces_b;
   best.max_concavity_mm = axes.value().max_concavity_mm;
   std::vector<Vec3> candidates = axes.value().directions;
+  // Sliding B off along one of the two parts' own axes is a common way out (flat parts, prisms).
+  for (const Mat3* r : {&pose_a.rotation, &pose_b.rotation})
+    for (int k = 0; k < 3; ++k) {
+      candidates.push_back(r->col(k));
+      candidates.push_back(-r->col(k));
+    }
   best.piece_directions = static_cast<int>(candidates.size());
   const double golden = kPi * (3.0 - std::sqrt(5.0));
   for (int i = 0; i < samples; ++i) {

@@ -6,7 +6,8 @@
 //  - as a vector: the smallest of those over candidate directions. The candidates are the
 //    separating axes of the overlapping pieces of an approximate convex decomposition of both
 //    meshes (kernel/convex_decomposition: for convex pieces that axis is their exact penetration
-//    direction) plus a Fibonacci lattice over the sphere. Every candidate's depth is measured on
+//    direction), the six axis directions of each part's own frame, and a Fibonacci lattice over
+//    the sphere. Every candidate's depth is measured on
 //    the meshes themselves, so the answer is a certified upper bound: B moved by it is free of A.
 //    For two convex closed meshes the decomposition is one piece each and the answer is the exact
 //    penetration depth; for non-convex parts it can exceed the true minimum when no candidate
@@ -33,8 +34,8 @@ struct DepthVector {
   Vec3 direction = Vec3::Zero();  // unit; the translation of B is depth_mm * direction
   double depth_mm = 0.0;
   int directions_tried = 0;
-  int piece_directions = 0;       // of which from the convex pieces' separating axes
-  bool from_piece_axis = false;   // the best direction came from a piece's separating axis
+  int piece_directions = 0;       // of which from the pieces' separating axes and the parts' frames
+  bool from_piece_axis = false;   // the best direction is one of those (not a lattice direction)
   int pieces_a = 0, pieces_b = 0;
   double max_concavity_mm = 0.0;  // the decomposition's deepest piece (either mesh)
   bool exact = false;             // both meshes convex and closed: depth_mm is the true minimum

@@ -1,11 +1,6 @@
 #include "server/gatekeeper_service.h"
 
-#include "kernel/contact_regions.h"
-#include "kernel/contact_verdict.h"
-#include "kernel/interference_volume.h"
-#include "kernel/penetration_depth.h"
-#include "occt_adapters/exact_measures.h"
-#include "kernel/mesh_distance.h"
+#include "server/clearance_query.h"
 #include "server/proto_convert.h"
 #include "server/rpc_helpers.h"
 
@@ -181,127 +176,7 @@ grpc::ServerUnaryReactor* GatekeeperService::ValidateSteps(grpc::CallbackServerC
 }
 
 grpc::Status GatekeeperService::clearance(const pb::ClearanceQueryRequest& request, pb::ClearanceQueryResponse* response) {
-  const auto t0 = Clock::now();
-  if (!std::isfinite(request.safety_gap_mm()) || request.safety_gap_mm() < 0.0)
-    return {grpc::StatusCode::INVALID_ARGUMENT, "safety_gap_mm: must be a finite, non-negative distance"};
-  // Each side is an uploaded part at a pose, or a scene object (its part at its pose).
-  auto resolve = [this](const pb::PosedPart& in, const std::string& side) -> Result<std::pair<std::string, RigidTransform>> {
-    if (!in.object_id().empty()) {
-      auto scene = scenes_.get(in.scene_id());
-      if (!scene.ok()) return Error{scene.error().code, side + ".scene_id", scene.error().message};
-      auto it = scene.value().objects.find(in.object_id());
-      if (it == scene.value().objects.end())
-        return Error{ErrorCode::kNotFound, side + ".object_id", "no object '" + in.object_id() + "'"};
-      return std::make_pair(it->second.part_id, it->second.pose.transform());
-    }
-    auto pose = to_pose(in.pose(), side + ".pose");
-    if (!pose.ok()) return pose.error();
-    return std::make_pair(in.part_id(), pose.value());
-  };
-  auto ra = resolve(request.a(), "a");
-  if (!ra.ok()) return to_status(ra.error());
-  auto rb = resolve(request.b(), "b");
-  if (!rb.ok()) return to_status(rb.error());
-  auto a = parts_.load(ra.value().first, 0.05);
-  if (!a.ok()) return to_status(Error{a.error().code, "a.part_id", a.error().message});
-  auto b = parts_.load(rb.value().first, 0.05);
-  if (!b.ok()) return to_status(Error{b.error().code, "b.part_id", b.error().message});
-  Result<RigidTransform> pa = ra.value().second;
-  Result<RigidTransform> pb_ = rb.value().second;
-  auto verdict = assess(*a.value()->bvh, pa.value(), *b.value()->bvh, pb_.value());
-  if (!verdict.ok()) return to_status(verdict.error());
-  const VerdictResult& v = verdict.value();
-  response->set_verdict(to_proto(v.verdict));
-  response->set_reason(v.reason);
-  response->set_distance_mm(v.distance_mm);
-  to_proto(v.point_a, response->mutable_point_a());
-  to_proto(v.point_b, response->mutable_point_b());
-  if (!v.contacts.empty()) {
-    response->set_triangle_a(v.contacts.front().triangle_a);
-    response->set_triangle_b(v.contacts.front().triangle_b);
-  }
-  constexpr std::size_t kMaxPairs = 100000;
-  auto near = pairs_within(*a.value()->bvh, pa.value(), *b.value()->bvh, pb_.value(), request.safety_gap_mm(), kMaxPairs);
-  if (!near.ok()) return to_status(near.error());
-  response->set_pairs_within_gap(static_cast<std::uint32_t>(near.value().pairs.size()));
-  response->set_pairs_truncated(near.value().truncated);
-  const double merge = request.region_merge_mm() > 0.0 ? request.region_merge_mm() : 10.0;
-  for (const ContactRegion& r : group_into_regions(near.value().pairs, merge)) {
-    pb::ContactRegion* out = response->add_regions();
-    out->set_min_distance_mm(r.min_distance_mm);
-    to_proto(r.point_a, out->mutable_point_a());
-    to_proto(r.point_b, out->mutable_point_b());
-    out->set_triangle_pairs(static_cast<std::uint32_t>(r.pairs.size()));
-    to_proto(r.bounds.min, out->mutable_bounds_min());
-    to_proto(r.bounds.max, out->mutable_bounds_max());
-  }
-  // Triangle distances are exact up to rounding (a few ulps of the coordinates); a CAD part's
-  // tessellation lies within its deflection of the surface.
-  const Aabb wa = a.value()->mesh->bounds(), wb = b.value()->mesh->bounds();
-  const double scale = std::max({wa.min.cwiseAbs().maxCoeff(), wa.max.cwiseAbs().maxCoeff(), wb.min.cwiseAbs().maxCoeff(),
-                                 wb.max.cwiseAbs().maxCoeff(), pa.value().translation.cwiseAbs().maxCoeff(),
-                                 pb_.value().translation.cwiseAbs().maxCoeff(), 1.0});
-  response->set_error_bound_mm(a.value()->deflection_mm + b.value()->deflection_mm + 1e-12 * scale);
-  // CAD on both sides, apart: the tessellation may hide the true minimum anywhere the mesh
-  // distance is within both deflections of its minimum; measure those face pairs exactly.
-  if (!a.value()->shape.is_null() && !b.value()->shape.is_null() && v.distance_mm > 0.0 &&
-      v.verdict != Verdict::kCollision) {
-    const double window = v.distance_mm + a.value()->deflection_mm + b.value()->deflection_mm;
-    auto candidates = pairs_within(*a.value()->bvh, pa.value(), *b.value()->bvh, pb_.value(), window, 20000);
-    if (candidates.ok() && !candidates.value().truncated) {
-      std::set<std::pair<int, int>> faces;
-      for (const ProximityPair& p : candidates.value().pairs)
-        faces.insert({a.value()->face_of_triangle[p.triangle_a], b.value()->face_of_triangle[p.triangle_b]});
-      double best = std::numeric_limits<double>::infinity();
-      bool all_measured = faces.size() <= 256;
-      for (const auto& [fa, fb] : faces) {
-        if (!all_measured) break;
-        auto d = occt::face_distance(a.value()->shape, fa, pa.value(), b.value()->shape, fb, pb_.value());
-        if (!d.ok()) {
-          all_measured = false;
-          break;
-        }
-        if (d.value().distance_mm < best) {
-          best = d.value().distance_mm;
-          to_proto(d.value().point_a, response->mutable_point_a());
-          to_proto(d.value().point_b, response->mutable_point_b());
-          response->set_face_a(static_cast<std::uint32_t>(fa));
-          response->set_face_b(static_cast<std::uint32_t>(fb));
-        }
-      }
-      if (all_measured && std::isfinite(best)) {
-        response->set_distance_mm(best);
-        response->set_refined_on_brep(true);
-        response->set_error_bound_mm(1e-6);  // BRepExtrema's precision
-        response->set_gap_violated(best < request.safety_gap_mm());
-      }
-    }
-  }
-  const bool interpenetrating = v.verdict == Verdict::kCollision;
-  std::string not_computed;
-  if (interpenetrating && request.compute_depth()) {
-    auto depth = penetration_vector(*a.value()->bvh, pa.value(), *b.value()->bvh, pb_.value(), 162, 1e-4);
-    if (depth.ok()) {
-      to_proto(depth.value().direction, response->mutable_depth_direction());
-      response->set_depth_mm(depth.value().depth_mm);
-      response->set_depth_max_angle_deg(depth.value().max_angle_between_samples_deg);
-    } else {
-      not_computed += "depth: " + depth.error().to_string() + "; ";
-    }
-  }
-  if (interpenetrating && request.compute_volume()) {
-    auto volume = interference_volume(*a.value()->bvh, pa.value(), *b.value()->bvh, pb_.value(), 256);
-    if (volume.ok()) {
-      response->set_interference_volume_mm3(volume.value().volume_mm3);
-      response->set_volume_cell_mm(volume.value().cell_mm);
-    } else {
-      not_computed += "volume: " + volume.error().to_string() + " (an open or non-manifold mesh has no inside)";
-    }
-  }
-  response->set_not_computed(not_computed);
-  if (!response->refined_on_brep()) response->set_gap_violated(v.distance_mm < request.safety_gap_mm() || v.verdict != Verdict::kClear);
-  response->set_elapsed_us(us_since(t0));
-  return grpc::Status::OK;
+  return answer_clearance(request, parts_, scenes_, response);
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::ClearanceQuery(grpc::CallbackServerContext* ctx,

@@ -89,4 +89,24 @@ int Daemon::stop(int signal_number) {
   return WIFSIGNALED(status) ? -WTERMSIG(status) : -1;
 }
 
+grpc::Status upload_part(gatekeeper::v1::Gatekeeper::Stub& stub, const std::string& bytes, const std::string& format,
+                         gatekeeper::v1::PartInfo* info, const std::string& declared_sha, std::size_t chunk) {
+  grpc::ClientContext ctx;
+  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+  auto writer = stub.UploadPart(&ctx, info);
+  gatekeeper::v1::UploadPartChunk header;
+  header.mutable_header()->set_name("part." + format);
+  header.mutable_header()->set_format(format);
+  header.mutable_header()->set_size_bytes(bytes.size());
+  header.mutable_header()->set_sha256(declared_sha.empty() ? sha256_hex(bytes) : declared_sha);
+  writer->Write(header);
+  for (std::size_t at = 0; at < bytes.size(); at += chunk) {
+    gatekeeper::v1::UploadPartChunk data;
+    data.set_data(bytes.substr(at, chunk));
+    if (!writer->Write(data)) break;
+  }
+  writer->WritesDone();
+  return writer->Finish();
+}
+
 }  // namespace gk::testing

@@ -35,4 +35,9 @@ std::string temp_dir(const std::string& tag);
 std::string sha256_hex(const std::string& bytes);
 std::string read_file(const std::string& path);
 
+// Streams bytes to UploadPart in chunks of at most `chunk` bytes (header first); declared_sha
+// empty means the true sha256.
+grpc::Status upload_part(gatekeeper::v1::Gatekeeper::Stub& stub, const std::string& bytes, const std::string& format,
+                         gatekeeper::v1::PartInfo* info, const std::string& declared_sha = "", std::size_t chunk = 1u << 20);
+
 }  // namespace gk::testing

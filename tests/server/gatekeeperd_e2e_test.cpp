@@ -46,25 +46,11 @@ grpc::Status call(pb::Gatekeeper::Stub& stub, const pb::ValidateStepRequest& r, 
   return stub.ValidateStep(&ctx, r, out);
 }
 
-// Streams a file in chunks of at most 1 MiB (header first).
+double vec_x(const pb::Vec3& v) { return v.x_mm(); }
+
 grpc::Status upload(pb::Gatekeeper::Stub& stub, const std::string& bytes, const std::string& format, pb::PartInfo* info,
                     const std::string& declared_sha = "", std::size_t chunk = 1u << 20) {
-  grpc::ClientContext ctx;
-  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
-  auto writer = stub.UploadPart(&ctx, info);
-  pb::UploadPartChunk header;
-  header.mutable_header()->set_name("part." + format);
-  header.mutable_header()->set_format(format);
-  header.mutable_header()->set_size_bytes(bytes.size());
-  header.mutable_header()->set_sha256(declared_sha.empty() ? testing::sha256_hex(bytes) : declared_sha);
-  writer->Write(header);
-  for (std::size_t at = 0; at < bytes.size(); at += chunk) {
-    pb::UploadPartChunk data;
-    data.set_data(bytes.substr(at, chunk));
-    if (!writer->Write(data)) break;
-  }
-  writer->WritesDone();
-  return writer->Finish();
+  return testing::upload_part(stub, bytes, format, info, declared_sha, chunk);
 }
 
 TEST(GatekeeperdE2E, ValidateStepAnswersClearAndCollisionWithItsStageAndTimes) {
@@ -269,8 +255,11 @@ TEST(GatekeeperdE2E, ClearanceQueryMatchesTheKernelAndRefusesOverload) {
   ASSERT_TRUE(stub->ClearanceQuery(&octx, overlap, &deep).ok());
   EXPECT_EQ(deep.verdict(), pb::COLLISION);
   EXPECT_NEAR(deep.interference_volume_mm3(), 200.0, 1e-6);  // 2 x 10 x 10, exact for axis-aligned boxes
-  EXPECT_GE(deep.depth_mm(), 2.0 - 1e-3);                   // true depth 2 along +x; sampled: an upper bound
-  EXPECT_LE(deep.depth_mm(), 2.0 / std::cos(0.5 * deep.depth_max_angle_deg() * kPi / 180.0) + 1e-3);
+  EXPECT_NEAR(deep.depth_mm(), 2.0, 1e-3);                  // convex cubes: the exact depth, 2 along +x
+  EXPECT_TRUE(deep.depth_exact());
+  EXPECT_EQ(deep.depth_method(), "convex-piece or part axis");
+  EXPECT_GT(vec_x(deep.depth_direction()), 0.999);
+  EXPECT_EQ(deep.volume_method(), "mesh ray cast");
   EXPECT_GE(deep.regions_size(), 1);
   EXPECT_LT(deep.error_bound_mm(), 1e-6);
   overlap.mutable_a()->set_part_id(rob.part_id());

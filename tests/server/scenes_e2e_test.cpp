@@ -21,22 +21,8 @@ namespace pb = ::gatekeeper::v1;
 using testing::Daemon;
 
 std::string upload_file(pb::Gatekeeper::Stub& stub, const std::string& relative, const std::string& format) {
-  const std::string bytes = testing::read_file(testing::shared_data(relative));
-  grpc::ClientContext ctx;
   pb::PartInfo info;
-  auto writer = stub.UploadPart(&ctx, &info);
-  pb::UploadPartChunk header;
-  header.mutable_header()->set_format(format);
-  header.mutable_header()->set_size_bytes(bytes.size());
-  header.mutable_header()->set_sha256(testing::sha256_hex(bytes));
-  writer->Write(header);
-  for (std::size_t at = 0; at < bytes.size(); at += 1u << 20) {
-    pb::UploadPartChunk data;
-    data.set_data(bytes.substr(at, 1u << 20));
-    writer->Write(data);
-  }
-  writer->WritesDone();
-  EXPECT_TRUE(writer->Finish().ok());
+  EXPECT_TRUE(testing::upload_part(stub, testing::read_file(testing::shared_data(relative)), format, &info).ok());
   return info.part_id();
 }
 

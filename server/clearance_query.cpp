@@ -1,0 +1,208 @@
+#include "server/clearance_query.h"
+
+#include "kernel/contact_regions.h"
+#include "kernel/contact_verdict.h"
+#include "kernel/interference_volume.h"
+#include "kernel/mesh_distance.h"
+#include "kernel/penetration_depth.h"
+#include "occt_adapters/exact_measures.h"
+#include "occt_adapters/shape_builders.h"
+#include "server/proto_convert.h"
+#include "server/rpc_helpers.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <set>
+
+namespace gk::server {
+namespace {
+
+// Parts are tessellated for queries at this chordal deflection [mm]; it enters the error bound.
+constexpr double kQueryDeflectionMm = 0.05;
+constexpr std::size_t kMaxReportedPairs = 100000;
+constexpr double kDefaultRegionMergeMm = 10.0;
+// B-Rep refinement gives up (keeping the mesh answer and its bound) beyond these many candidates.
+constexpr std::size_t kMaxRefinementPairs = 20000;
+constexpr std::size_t kMaxRefinementFaces = 256;
+// Depth: lattice size and contact resolution [mm] of the advancement along each candidate.
+constexpr int kDepthLatticeDirections = 162;
+constexpr double kDepthResolutionMm = 1e-4;
+constexpr int kVolumeRaysPerAxis = 256;
+
+struct PosedSide {
+  std::shared_ptr<const LoadedPart> part;
+  RigidTransform pose;
+  bool is_cad() const { return !part->shape.is_null(); }
+};
+
+// A side is an uploaded part at a pose, or a scene object (its part at its pose).
+Result<PosedSide> resolve(const pb::PosedPart& in, const std::string& side, PartRegistry& parts, SceneStore& scenes) {
+  std::string part_id = in.part_id();
+  RigidTransform pose;
+  if (!in.object_id().empty()) {
+    auto scene = scenes.get(in.scene_id());
+    if (!scene.ok()) return Error{scene.error().code, side + ".scene_id", scene.error().message};
+    auto it = scene.value().objects.find(in.object_id());
+    if (it == scene.value().objects.end()) return Error{ErrorCode::kNotFound, side + ".object_id", "no object '" + in.object_id() + "'"};
+    part_id = it->second.part_id;
+    pose = it->second.pose.transform();
+  } else {
+    auto p = to_pose(in.pose(), side + ".pose");
+    if (!p.ok()) return p.error();
+    pose = p.value();
+  }
+  auto loaded = parts.load(part_id, kQueryDeflectionMm);
+  if (!loaded.ok()) return Error{loaded.error().code, side + ".part_id", loaded.error().message};
+  return PosedSide{loaded.value(), pose};
+}
+
+void add_regions(const std::vector<ProximityPair>& pairs, double merge_mm, const PosedSide& a, const PosedSide& b,
+                 pb::ClearanceQueryResponse* response) {
+  for (const ContactRegion& r : group_into_regions(pairs, merge_mm)) {
+    pb::ContactRegion* out = response->add_regions();
+    out->set_min_distance_mm(r.min_distance_mm);
+    to_proto(r.point_a, out->mutable_point_a());
+    to_proto(r.point_b, out->mutable_point_b());
+    out->set_triangle_pairs(static_cast<std::uint32_t>(r.pairs.size()));
+    to_proto(r.bounds.min, out->mutable_bounds_min());
+    to_proto(r.bounds.max, out->mutable_bounds_max());
+    std::set<int> faces_a, faces_b;
+    for (const ProximityPair& p : r.pairs) {
+      if (a.is_cad()) faces_a.insert(a.part->face_of_triangle[p.triangle_a]);
+      if (b.is_cad()) faces_b.insert(b.part->face_of_triangle[p.triangle_b]);
+    }
+    for (int f : faces_a) out->add_faces_a(static_cast<std::uint32_t>(f));
+    for (int f : faces_b) out->add_faces_b(static_cast<std::uint32_t>(f));
+  }
+}
+
+// CAD on both sides, apart: the tessellation may hide the true minimum anywhere the mesh distance
+// is within both deflections of its minimum, so every face pair there is measured exactly.
+void refine_on_brep(const PosedSide& a, const PosedSide& b, double mesh_distance_mm, double safety_gap_mm,
+                    pb::ClearanceQueryResponse* response) {
+  const double window = mesh_distance_mm + a.part->deflection_mm + b.part->deflection_mm;
+  auto candidates = pairs_within(*a.part->bvh, a.pose, *b.part->bvh, b.pose, window, kMaxRefinementPairs);
+  if (!candidates.ok() || candidates.value().truncated) return;
+  std::set<std::pair<int, int>> faces;
+  for (const ProximityPair& p : candidates.value().pairs)
+    faces.insert({a.part->face_of_triangle[p.triangle_a], b.part->face_of_triangle[p.triangle_b]});
+  if (faces.size() > kMaxRefinementFaces) return;
+  double best = std::numeric_limits<double>::infinity();
+  occt::ShapeDistance closest;
+  std::pair<int, int> closest_faces{0, 0};
+  for (const auto& [fa, fb] : faces) {
+    auto d = occt::face_distance(a.part->shape, fa, a.pose, b.part->shape, fb, b.pose);
+    if (!d.ok()) return;  // keep the mesh answer and its bound
+    if (d.value().distance_mm < best) {
+      best = d.value().distance_mm;
+      closest = d.value();
+      closest_faces = {fa, fb};
+    }
+  }
+  if (!std::isfinite(best)) return;
+  response->set_distance_mm(best);
+  to_proto(closest.point_a, response->mutable_point_a());
+  to_proto(closest.point_b, response->mutable_point_b());
+  response->set_face_a(static_cast<std::uint32_t>(closest_faces.first));
+  response->set_face_b(static_cast<std::uint32_t>(closest_faces.second));
+  response->set_refined_on_brep(true);
+  response->set_error_bound_mm(1e-6);  // BRepExtrema's precision
+  response->set_gap_violated(best < safety_gap_mm);
+}
+
+std::string add_depth(const PosedSide& a, const PosedSide& b, pb::ClearanceQueryResponse* response) {
+  auto depth = penetration_vector(*a.part->bvh, a.pose, *b.part->bvh, b.pose, kDepthLatticeDirections, kDepthResolutionMm);
+  if (!depth.ok()) return "depth: " + depth.error().to_string() + "; ";
+  const DepthVector& d = depth.value();
+  to_proto(d.direction, response->mutable_depth_direction());
+  response->set_depth_mm(d.depth_mm);
+  response->set_depth_max_angle_deg(d.max_angle_between_samples_deg);
+  response->set_depth_exact(d.exact);
+  response->set_depth_method(d.from_piece_axis ? "convex-piece or part axis" : "lattice direction");
+  response->set_depth_pieces_a(static_cast<std::uint32_t>(d.pieces_a));
+  response->set_depth_pieces_b(static_cast<std::uint32_t>(d.pieces_b));
+  return "";
+}
+
+std::string add_volume(const PosedSide& a, const PosedSide& b, pb::ClearanceQueryResponse* response) {
+  std::string why_not_brep;
+  if (a.is_cad() && b.is_cad()) {
+    auto placed_a = occt::place(a.part->shape, a.pose);
+    auto placed_b = occt::place(b.part->shape, b.pose);
+    if (placed_a.ok() && placed_b.ok()) {
+      auto exact = occt::interference_volume(placed_a.value(), placed_b.value());
+      if (exact.ok()) {
+        response->set_interference_volume_mm3(exact.value());
+        response->set_volume_cell_mm(0.0);
+        response->set_volume_method("brep boolean common");
+        return "";
+      }
+      why_not_brep = " (the Boolean common failed: " + exact.error().message + ")";
+    }
+  }
+  auto volume = interference_volume(*a.part->bvh, a.pose, *b.part->bvh, b.pose, kVolumeRaysPerAxis);
+  if (!volume.ok())
+    return "volume: " + volume.error().to_string() + " (an open or non-manifold mesh has no inside)" + why_not_brep;
+  response->set_interference_volume_mm3(volume.value().volume_mm3);
+  response->set_volume_cell_mm(volume.value().cell_mm);
+  response->set_volume_method("mesh ray cast" + why_not_brep);
+  return "";
+}
+
+}  // namespace
+
+grpc::Status answer_clearance(const pb::ClearanceQueryRequest& request, PartRegistry& parts, SceneStore& scenes,
+                              pb::ClearanceQueryResponse* response) {
+  const auto t0 = Clock::now();
+  if (!std::isfinite(request.safety_gap_mm()) || request.safety_gap_mm() < 0.0)
+    return {grpc::StatusCode::INVALID_ARGUMENT, "safety_gap_mm: must be a finite, non-negative distance"};
+  if (!std::isfinite(request.region_merge_mm()) || request.region_merge_mm() < 0.0)
+    return {grpc::StatusCode::INVALID_ARGUMENT, "region_merge_mm: must be a finite, non-negative distance"};
+  auto ra = resolve(request.a(), "a", parts, scenes);
+  if (!ra.ok()) return to_status(ra.error());
+  auto rb = resolve(request.b(), "b", parts, scenes);
+  if (!rb.ok()) return to_status(rb.error());
+  const PosedSide& a = ra.value();
+  const PosedSide& b = rb.value();
+  auto verdict = assess(*a.part->bvh, a.pose, *b.part->bvh, b.pose);
+  if (!verdict.ok()) return to_status(verdict.error());
+  const VerdictResult& v = verdict.value();
+  response->set_verdict(to_proto(v.verdict));
+  response->set_reason(v.reason);
+  response->set_distance_mm(v.distance_mm);
+  to_proto(v.point_a, response->mutable_point_a());
+  to_proto(v.point_b, response->mutable_point_b());
+  if (!v.contacts.empty()) {
+    response->set_triangle_a(v.contacts.front().triangle_a);
+    response->set_triangle_b(v.contacts.front().triangle_b);
+    if (a.is_cad()) response->set_face_a(static_cast<std::uint32_t>(a.part->face_of_triangle[v.contacts.front().triangle_a]));
+    if (b.is_cad()) response->set_face_b(static_cast<std::uint32_t>(b.part->face_of_triangle[v.contacts.front().triangle_b]));
+  }
+  auto near = pairs_within(*a.part->bvh, a.pose, *b.part->bvh, b.pose, request.safety_gap_mm(), kMaxReportedPairs);
+  if (!near.ok()) return to_status(near.error());
+  response->set_pairs_within_gap(static_cast<std::uint32_t>(near.value().pairs.size()));
+  response->set_pairs_truncated(near.value().truncated);
+  add_regions(near.value().pairs, request.region_merge_mm() > 0.0 ? request.region_merge_mm() : kDefaultRegionMergeMm,
+              a, b, response);
+  // Triangle distances are exact up to rounding (a few ulps of the coordinates); a CAD part's
+  // tessellation lies within its deflection of the surface.
+  const Aabb wa = a.part->mesh->bounds(), wb = b.part->mesh->bounds();
+  const double scale = std::max({wa.min.cwiseAbs().maxCoeff(), wa.max.cwiseAbs().maxCoeff(), wb.min.cwiseAbs().maxCoeff(),
+                                 wb.max.cwiseAbs().maxCoeff(), a.pose.translation.cwiseAbs().maxCoeff(),
+                                 b.pose.translation.cwiseAbs().maxCoeff(), 1.0});
+  response->set_error_bound_mm(a.part->deflection_mm + b.part->deflection_mm + 1e-12 * scale);
+  if (a.is_cad() && b.is_cad() && v.distance_mm > 0.0 && v.verdict != Verdict::kCollision)
+    refine_on_brep(a, b, v.distance_mm, request.safety_gap_mm(), response);
+  const bool interpenetrating = v.verdict == Verdict::kCollision;
+  std::string not_computed;
+  if (interpenetrating && request.compute_depth()) not_computed += add_depth(a, b, response);
+  if (interpenetrating && request.compute_volume()) not_computed += add_volume(a, b, response);
+  response->set_not_computed(not_computed);
+  if (!response->refined_on_brep())
+    response->set_gap_violated(v.distance_mm < request.safety_gap_mm() || v.verdict != Verdict::kClear);
+  response->set_elapsed_us(us_since(t0));
+  return grpc::Status::OK;
+}
+
+}  // namespace gk::server
