@@ -11,6 +11,8 @@
 #include <TopExp.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
 
+#include <limits>
+
 namespace gk::occt {
 
 Result<ShapeDistance> exact_distance(const Shape& a, const Shape& b) {
@@ -33,26 +35,31 @@ Result<ShapeDistance> exact_distance(const Shape& a, const Shape& b) {
   return out;
 }
 
-Result<ShapeDistance> face_distance(const Shape& a, int face_a, const RigidTransform& pose_a, const Shape& b, int face_b,
-                                    const RigidTransform& pose_b) {
+Result<ClosestFacePair> closest_face_pair(const Shape& a, const RigidTransform& pose_a, const Shape& b,
+                                          const RigidTransform& pose_b, const std::vector<std::pair<int, int>>& face_pairs) {
   if (a.is_null()) return invalid_argument("a", "is empty");
   if (b.is_null()) return invalid_argument("b", "is empty");
-  TopoDS_Shape fa, fb;
-  auto pick = guarded("faces", "selecting faces", [&] {
-    TopTools_IndexedMapOfShape map_a, map_b;
-    TopExp::MapShapes(a.impl().shape, TopAbs_FACE, map_a);
-    TopExp::MapShapes(b.impl().shape, TopAbs_FACE, map_b);
-    if (face_a >= 1 && face_a <= map_a.Extent()) fa = map_a(face_a);
-    if (face_b >= 1 && face_b <= map_b.Extent()) fb = map_b(face_b);
-  });
-  if (!pick.ok()) return pick.error();
-  if (fa.IsNull()) return invalid_argument("face_a", "no face " + std::to_string(face_a));
-  if (fb.IsNull()) return invalid_argument("face_b", "no face " + std::to_string(face_b));
-  auto placed_a = place(wrap(fa), pose_a);
+  if (face_pairs.empty()) return invalid_argument("face_pairs", "is empty");
+  auto placed_a = place(a, pose_a);
   if (!placed_a.ok()) return placed_a.error();
-  auto placed_b = place(wrap(fb), pose_b);
+  auto placed_b = place(b, pose_b);
   if (!placed_b.ok()) return placed_b.error();
-  return exact_distance(placed_a.value(), placed_b.value());
+  TopTools_IndexedMapOfShape map_a, map_b;
+  auto mapped = guarded("shapes", "mapping faces", [&] {
+    TopExp::MapShapes(placed_a.value().impl().shape, TopAbs_FACE, map_a);
+    TopExp::MapShapes(placed_b.value().impl().shape, TopAbs_FACE, map_b);
+  });
+  if (!mapped.ok()) return mapped.error();
+  ClosestFacePair best;
+  best.distance.distance_mm = std::numeric_limits<double>::infinity();
+  for (const auto& [fa, fb] : face_pairs) {
+    if (fa < 1 || fa > map_a.Extent()) return invalid_argument("face_pairs", "no face " + std::to_string(fa) + " in a");
+    if (fb < 1 || fb > map_b.Extent()) return invalid_argument("face_pairs", "no face " + std::to_string(fb) + " in b");
+    auto d = exact_distance(wrap(map_a(fa)), wrap(map_b(fb)));
+    if (!d.ok()) return d.error();
+    if (d.value().distance_mm < best.distance.distance_mm) best = {d.value(), fa, fb};
+  }
+  return best;
 }
 
 Result<double> interference_volume(const Shape& a, const Shape& b) {

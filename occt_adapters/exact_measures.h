@@ -7,6 +7,9 @@
 #include "kernel/status.h"
 #include "occt_adapters/shape.h"
 
+#include <utility>
+#include <vector>
+
 namespace gk::occt {
 
 struct ShapeDistance {
@@ -18,10 +21,14 @@ struct ShapeDistance {
 
 Result<ShapeDistance> exact_distance(const Shape& a, const Shape& b);
 
-// The exact distance between face face_a of a (placed at pose_a) and face face_b of b (at pose_b);
-// faces are numbered 1.. in the order of the shape's face map (as mesh_shape's face ids).
-Result<ShapeDistance> face_distance(const Shape& a, int face_a, const RigidTransform& pose_a, const Shape& b, int face_b,
-                                    const RigidTransform& pose_b);
+// The closest of the given face pairs (1-based ids, a's face then b's), each measured exactly with
+// the shapes placed at their poses; the face maps are built once for all pairs.
+struct ClosestFacePair {
+  ShapeDistance distance;
+  int face_a = 0, face_b = 0;
+};
+Result<ClosestFacePair> closest_face_pair(const Shape& a, const RigidTransform& pose_a, const Shape& b,
+                                          const RigidTransform& pose_b, const std::vector<std::pair<int, int>>& face_pairs);
 
 // Volume of the Boolean common of the two shapes [mm^3]; 0 when they are disjoint or only touch.
 Result<double> interference_volume(const Shape& a, const Shape& b);

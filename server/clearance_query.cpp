@@ -88,24 +88,14 @@ void refine_on_brep(const PosedSide& a, const PosedSide& b, double mesh_distance
   for (const ProximityPair& p : candidates.value().pairs)
     faces.insert({a.part->face_of_triangle[p.triangle_a], b.part->face_of_triangle[p.triangle_b]});
   if (faces.size() > kMaxRefinementFaces) return;
-  double best = std::numeric_limits<double>::infinity();
-  occt::ShapeDistance closest;
-  std::pair<int, int> closest_faces{0, 0};
-  for (const auto& [fa, fb] : faces) {
-    auto d = occt::face_distance(a.part->shape, fa, a.pose, b.part->shape, fb, b.pose);
-    if (!d.ok()) return;  // keep the mesh answer and its bound
-    if (d.value().distance_mm < best) {
-      best = d.value().distance_mm;
-      closest = d.value();
-      closest_faces = {fa, fb};
-    }
-  }
-  if (!std::isfinite(best)) return;
+  auto closest = occt::closest_face_pair(a.part->shape, a.pose, b.part->shape, b.pose, {faces.begin(), faces.end()});
+  if (!closest.ok()) return;  // keep the mesh answer and its bound
+  const double best = closest.value().distance.distance_mm;
   response->set_distance_mm(best);
-  to_proto(closest.point_a, response->mutable_point_a());
-  to_proto(closest.point_b, response->mutable_point_b());
-  response->set_face_a(static_cast<std::uint32_t>(closest_faces.first));
-  response->set_face_b(static_cast<std::uint32_t>(closest_faces.second));
+  to_proto(closest.value().distance.point_a, response->mutable_point_a());
+  to_proto(closest.value().distance.point_b, response->mutable_point_b());
+  response->set_face_a(static_cast<std::uint32_t>(closest.value().face_a));
+  response->set_face_b(static_cast<std::uint32_t>(closest.value().face_b));
   response->set_refined_on_brep(true);
   response->set_error_bound_mm(1e-6);  // BRepExtrema's precision
   response->set_gap_violated(best < safety_gap_mm);

@@ -95,8 +95,11 @@ struct Timings {
     double total = 0.0;
     for (double x : us) total += x;
     state.counters["mean_us"] = total / static_cast<double>(us.size());
+    state.counters["p10_us"] = us[us.size() / 10];
     state.counters["median_us"] = us[us.size() / 2];
+    state.counters["p90_us"] = us[us.size() * 9 / 10];
     state.counters["p99_us"] = us[us.size() * 99 / 100];
+    state.counters["max_us"] = us.back();
     state.counters["queries"] = static_cast<double>(us.size());
     state.counters["checksum"] = checksum;
   }
@@ -206,6 +209,12 @@ double clearance_ours(const Subject& a, const RigidTransform& pa, const Subject&
   return v.distance_mm + static_cast<double>(regions.size());
 }
 
+// FCL's nearest equivalent: every contact, then the distance with witnesses (FCL has no "pairs
+// within a gap" query and no regions).
+double clearance_fcl(const Subject& a, const RigidTransform& pa, const Subject& b, const RigidTransform& pb) {
+  return collide_fcl(a, pa, b, pb) + distance_fcl(a, pa, b, pb);
+}
+
 void BM_EnvRob_Collide_Ours(benchmark::State& s) { env_rob(s, collide_ours); }
 void BM_EnvRob_Collide_Fcl(benchmark::State& s) { env_rob(s, collide_fcl); }
 void BM_EnvRob_Distance_Ours(benchmark::State& s) { env_rob(s, distance_ours); }
@@ -215,6 +224,7 @@ void BM_Large_Collide_Fcl(benchmark::State& s) { large(s, collide_fcl); }
 void BM_Large_Distance_Ours(benchmark::State& s) { large(s, distance_ours); }
 void BM_Large_Distance_Fcl(benchmark::State& s) { large(s, distance_fcl); }
 void BM_Large_Clearance_Ours(benchmark::State& s) { large(s, clearance_ours); }
+void BM_Large_Clearance_Fcl(benchmark::State& s) { large(s, clearance_fcl); }
 
 // --- build and refit ----------------------------------------------------------------------------
 
@@ -256,6 +266,7 @@ BENCHMARK(BM_Large_Collide_Fcl)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->
 BENCHMARK(BM_Large_Distance_Ours)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_Large_Distance_Fcl)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_Large_Clearance_Ours)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_Large_Clearance_Fcl)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_Build_Ours)->Unit(benchmark::kMillisecond)->Iterations(5);
 BENCHMARK(BM_Build_Fcl)->Unit(benchmark::kMillisecond)->Iterations(5);
 BENCHMARK(BM_Refit_Ours)->Unit(benchmark::kMillisecond)->Iterations(20);

@@ -1,0 +1,187 @@
+// ClearanceQuery's expensive extras, measured apart from the mesh answer:
+//  - the B-Rep refinement of two CAD parts near contact (the face pairs in the deflection window,
+//    each through BRepExtrema), against BRepExtrema on the whole shapes;
+//  - the penetration depth vector of interpenetrating large meshes.
+//   build/tests/benchmarks/clearance_benchmark [--benchmark_filter=...]
+#include "kernel/contact_regions.h"
+#include "kernel/contact_verdict.h"
+#include "kernel/mesh_bvh.h"
+#include "kernel/mesh_distance.h"
+#include "kernel/penetration_depth.h"
+#include "mesh_io/mesh_file_reader.h"
+#include "occt_adapters/exact_measures.h"
+#include "occt_adapters/shape_builders.h"
+#include "occt_adapters/shape_import.h"
+#include "occt_adapters/shape_mesher.h"
+#include "tests/support/random_meshes.h"
+
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <set>
+#include <vector>
+
+namespace {
+
+using gk::RigidTransform;
+using gk::Vec3;
+using Clock = std::chrono::steady_clock;
+
+template <typename T>
+T must(gk::Result<T> r) {
+  if (!r.ok()) {
+    std::fprintf(stderr, "%s\n", r.error().to_string().c_str());
+    std::exit(2);
+  }
+  return std::move(r).value();
+}
+
+void report(benchmark::State& state, std::vector<double> us) {
+  std::sort(us.begin(), us.end());
+  double total = 0.0;
+  for (double x : us) total += x;
+  state.counters["mean_us"] = total / static_cast<double>(us.size());
+  state.counters["p10_us"] = us[us.size() / 10];
+  state.counters["median_us"] = us[us.size() / 2];
+  state.counters["p90_us"] = us[us.size() * 9 / 10];
+  state.counters["max_us"] = us.back();
+  state.counters["queries"] = static_cast<double>(us.size());
+}
+
+double since(Clock::time_point t0) { return std::chrono::duration<double, std::micro>(Clock::now() - t0).count(); }
+
+// Two CAD parts tessellated as the service does (0.05 mm), and poses of B 0.05-3 mm from A.
+struct CadPair {
+  gk::occt::Shape a, b;
+  std::vector<int> face_of_a, face_of_b;  // each triangle's B-Rep face
+  std::shared_ptr<gk::MeshBvh> bvh_a, bvh_b;
+  std::vector<RigidTransform> poses;
+};
+
+const CadPair& cad_pair() {
+  static const CadPair pair = [] {
+    CadPair p{};
+    p.a = must(gk::occt::read_shape_file(gk::testing::shared_data("step/occt/Pump_TopCover.brep")));
+    p.b = must(gk::occt::read_shape_file(gk::testing::shared_data("step/occt/Pump_Nut.brep")));
+    gk::occt::MeshedShape mesh_a = must(gk::occt::mesh_shape(p.a, 0.05));
+    gk::occt::MeshedShape mesh_b = must(gk::occt::mesh_shape(p.b, 0.05));
+    p.face_of_a = mesh_a.face_of_triangle;
+    p.face_of_b = mesh_b.face_of_triangle;
+    p.bvh_a = must(gk::MeshBvh::build(gk::testing::share(std::move(mesh_a.mesh))));
+    p.bvh_b = must(gk::MeshBvh::build(gk::testing::share(std::move(mesh_b.mesh))));
+    gk::testing::Rng rng(31);
+    std::uniform_real_distribution<double> gap(0.05, 3.0);
+    const Vec3 ca = p.bvh_a->root_bounds().center(), cb = p.bvh_b->root_bounds().center();
+    const double reach = p.bvh_a->root_bounds().diagonal().norm() + p.bvh_b->root_bounds().diagonal().norm();
+    while (p.poses.size() < 30) {
+      RigidTransform pose = gk::testing::random_pose(rng, 0.0);
+      pose.translation = ca + Vec3::Random().normalized() * reach - pose.rotation * cb;
+      const auto d = must(gk::distance(*p.bvh_a, {}, *p.bvh_b, pose));
+      pose.translation -= (d.distance_mm - gap(rng)) * (d.point_b - d.point_a).normalized();
+      if (must(gk::distance(*p.bvh_a, {}, *p.bvh_b, pose)).distance_mm > 0.02) p.poses.push_back(pose);
+    }
+    return p;
+  }();
+  return pair;
+}
+
+// The mesh answer of ClearanceQuery: verdict, pairs within a 1 mm gap, regions.
+void BM_Cad_MeshAnswer(benchmark::State& state) {
+  const CadPair& p = cad_pair();
+  std::vector<double> us;
+  for (auto _ : state)
+    for (const RigidTransform& pose : p.poses) {
+      const auto t0 = Clock::now();
+      const auto v = must(gk::assess(*p.bvh_a, {}, *p.bvh_b, pose));
+      const auto near = must(gk::pairs_within(*p.bvh_a, {}, *p.bvh_b, pose, 1.0, 100000));
+      benchmark::DoNotOptimize(gk::group_into_regions(near.pairs, 10.0).size() + v.contacts.size());
+      us.push_back(since(t0));
+    }
+  report(state, us);
+}
+
+// The refinement the service adds for CAD parts: the face pairs within the deflection window,
+// each measured exactly. The distance sum is compared with BRepExtrema on whole shapes below.
+void BM_Cad_BrepRefinement(benchmark::State& state) {
+  const CadPair& p = cad_pair();
+  std::vector<double> us;
+  double sum = 0.0, face_pairs = 0.0;
+  for (auto _ : state) {
+    sum = face_pairs = 0.0;
+    for (const RigidTransform& pose : p.poses) {
+      const auto t0 = Clock::now();
+      const double d = must(gk::distance(*p.bvh_a, {}, *p.bvh_b, pose)).distance_mm;
+      const auto candidates = must(gk::pairs_within(*p.bvh_a, {}, *p.bvh_b, pose, d + 0.1, 20000));
+      std::set<std::pair<int, int>> faces;
+      for (const auto& c : candidates.pairs)
+        faces.insert({p.face_of_a[c.triangle_a], p.face_of_b[c.triangle_b]});
+      sum += must(gk::occt::closest_face_pair(p.a, {}, p.b, pose, {faces.begin(), faces.end()})).distance.distance_mm;
+      face_pairs += static_cast<double>(faces.size());
+      us.push_back(since(t0));
+    }
+  }
+  report(state, us);
+  state.counters["distance_sum_mm"] = sum;
+  state.counters["face_pairs_per_query"] = face_pairs / static_cast<double>(p.poses.size());
+}
+
+// The slow peer: BRepExtrema_DistShapeShape on the whole placed shapes.
+void BM_Cad_BrepExtremaWhole(benchmark::State& state) {
+  const CadPair& p = cad_pair();
+  std::vector<double> us;
+  double sum = 0.0;
+  for (auto _ : state) {
+    sum = 0.0;
+    for (const RigidTransform& pose : p.poses) {
+      const auto t0 = Clock::now();
+      sum += must(gk::occt::exact_distance(p.a, must(gk::occt::place(p.b, pose)))).distance_mm;
+      us.push_back(since(t0));
+    }
+  }
+  report(state, us);
+  state.counters["distance_sum_mm"] = sum;
+}
+
+// The depth vector of two large closed-enough meshes overlapping by 0.5-3 mm.
+void BM_Large_DepthVector(benchmark::State& state) {
+  static const auto a = must(gk::MeshBvh::build(gk::testing::share(
+      must(gk::mesh_io::read_mesh_file(gk::testing::shared_data("meshes/occt/TR12J_OCC64K.stl"))))));
+  static const auto b = must(gk::MeshBvh::build(gk::testing::share(
+      must(gk::mesh_io::read_mesh_file(gk::testing::shared_data("meshes/cgal/fandisk_large.off"))))));
+  gk::testing::Rng rng(99);
+  std::uniform_real_distribution<double> overlap(0.5, 3.0);
+  std::vector<RigidTransform> poses;
+  const Vec3 ca = a->root_bounds().center(), cb = b->root_bounds().center();
+  const double reach = a->root_bounds().diagonal().norm() + b->root_bounds().diagonal().norm();
+  while (poses.size() < 8) {
+    RigidTransform pose = gk::testing::random_pose(rng, 0.0);
+    pose.translation = ca + Vec3::Random().normalized() * reach - pose.rotation * cb;
+    const auto d = must(gk::distance(*a, {}, *b, pose));
+    pose.translation -= (d.distance_mm + overlap(rng)) * (d.point_b - d.point_a).normalized();
+    poses.push_back(pose);
+  }
+  std::vector<double> us;
+  double sum = 0.0;
+  for (auto _ : state) {
+    sum = 0.0;
+    for (const RigidTransform& pose : poses) {
+      const auto t0 = Clock::now();
+      sum += must(gk::penetration_vector(*a, {}, *b, pose, 162, 1e-4)).depth_mm;
+      us.push_back(since(t0));
+    }
+  }
+  report(state, us);
+  state.counters["depth_sum_mm"] = sum;
+}
+
+}  // namespace
+
+BENCHMARK(BM_Cad_MeshAnswer)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_Cad_BrepRefinement)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_Cad_BrepExtremaWhole)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_Large_DepthVector)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+BENCHMARK_MAIN();
