@@ -1,0 +1,43 @@
+// A seeded, realistic factory scene for audit tests and benchmarks: a hall of 10 m bays with
+// building columns and walls, pipes crossing the whole hall, robot cells (the KUKA KR10 meshes
+// from ../shared/data, 7 links each), machines (TR12J, motor, turbine, fandisk), rack rows and
+// conveyors with bolts resting on them, from millimetres to tens of metres. Identical meshes are
+// shared (one MeshBvh for every copy). Beside the hall, deliberate clashes and near misses
+// between crates whose answers are known.
+#pragma once
+
+#include "kernel/scene_audit.h"
+
+#include <cstddef>
+#include <vector>
+
+namespace gk::testing {
+
+struct FactorySceneOptions {
+  unsigned seed = 1;
+  std::size_t objects = 1000;          // about this many objects ...
+  std::size_t triangles = 5'000'000;   // ... and this many triangles (counted per instance)
+  int deliberate_clashes = 10;         // crate pairs overlapping by clash_depth_mm
+  int near_misses = 10;                // crate pairs apart by near_miss_gap_mm
+  double clash_depth_mm = 5.0;
+  double near_miss_gap_mm = 2.0;
+};
+
+struct KnownPair {
+  std::uint32_t a = 0, b = 0;  // a < b
+  bool clash = false;          // overlapping crates; otherwise a near miss
+  double gap_mm = 0.0;         // near misses: the exact distance
+};
+
+struct FactoryScene {
+  std::vector<AuditObject> objects;
+  std::vector<KnownPair> known;
+  std::vector<ContactRule> rules;  // the scene's intended contacts
+  std::size_t unique_meshes = 0;
+  std::size_t triangles = 0;
+};
+
+// Throws std::runtime_error if a shared mesh cannot be read.
+FactoryScene generate_factory_scene(const FactorySceneOptions& options);
+
+}  // namespace gk::testing
