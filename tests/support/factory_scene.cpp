@@ -93,11 +93,24 @@ FactoryScene generate_factory_scene(const FactorySceneOptions& options) {
   const std::vector<std::shared_ptr<const MeshBvh>> machines = {
       shared_mesh("meshes/occt/TR12J_OCC64K.stl", 1.0), shared_mesh("meshes/occt/motor.stl", 10.0),
       shared_mesh("meshes/cgal/turbine.off", 10.0), shared_mesh("meshes/cgal/fandisk_large.off", 50.0)};
+  // The mesh an object gets: the shared one, or its own copy.
+  auto own = [&](const std::shared_ptr<const MeshBvh>& shared) {
+    return options.distinct_meshes ? bvh_of(shared->mesh()) : shared;
+  };
   std::size_t robot_triangles = 0;
-  for (const auto& m : robot) robot_triangles += m->mesh().triangle_count();
+  Aabb robot_box;
+  for (const auto& m : robot) {
+    robot_triangles += m->mesh().triangle_count();
+    robot_box.extend(m->root_bounds());
+  }
+  // Two robots of a cell stand so their boxes (turned anyhow) just overlap; the conveyor passes
+  // 20 mm beyond the robots' reach box.
+  const double robot_radius = std::hypot(robot_box.half_extent().x(), robot_box.half_extent().y());
+  const double robot_spacing = 1.1 * robot_radius;
+  const double conveyor_offset = robot_radius + 400.0 + 20.0;
 
-  // Bays: about ten objects each; heavy bays (robot cells, machines) until the triangle target.
-  const std::size_t bays = std::max<std::size_t>(4, options.objects / 9);
+  // Bays: about twelve objects each; heavy bays (robot cells, machines) until the triangle target.
+  const std::size_t bays = std::max<std::size_t>(4, options.objects / 12);
   const auto side = static_cast<std::size_t>(std::ceil(std::sqrt(static_cast<double>(bays))));
   const double hall_x = static_cast<double>(side) * kBayMm, hall_y = static_cast<double>((bays + side - 1) / side) * kBayMm;
   for (std::size_t i = 0; i < bays; ++i) {
@@ -105,16 +118,19 @@ FactoryScene generate_factory_scene(const FactorySceneOptions& options) {
     const std::string bay = "bay" + std::to_string(i);
     b.add(bay + "/column", "column", "", column, RigidTransform::from_translation(Vec3(x0, y0, 0)));
     const Vec3 centre(x0 + 5000 + jitter(rng), y0 + 4000 + jitter(rng), 0);
-    const bool heavy = scene.triangles + robot_triangles <= options.triangles;
+    const bool heavy = scene.triangles + 2 * robot_triangles <= options.triangles;
     if (heavy && i % 4 != 3) {
-      // A robot cell: its links, one group, with a conveyor feeding it.
-      for (std::size_t k = 0; k < robot.size(); ++k)
-        b.add(bay + "/robot/link" + std::to_string(k), "robot", bay + "/robot", robot[k],
-              RigidTransform::from_axis_angle(Vec3::UnitZ(), turn(rng), centre));
-      b.add(bay + "/conveyor", "conveyor", "", conveyor, RigidTransform::from_translation(centre + Vec3(0, 2600, 0)));
+      // A robot cell: two robots working close together (each one group of links), with a
+      // conveyor feeding them: boxes overlap, meshes mostly do not, so the narrow phase decides.
+      for (int r = 0; r < 2; ++r) {
+        const std::string group = bay + "/robot" + std::to_string(r);
+        const RigidTransform base = RigidTransform::from_axis_angle(Vec3::UnitZ(), turn(rng), centre + Vec3(r * robot_spacing, 0, 0));
+        for (std::size_t k = 0; k < robot.size(); ++k) b.add(group + "/link" + std::to_string(k), "robot", group, own(robot[k]), base);
+      }
+      b.add(bay + "/conveyor", "conveyor", "", conveyor, RigidTransform::from_translation(centre + Vec3(0, conveyor_offset, 0)));
     } else if (heavy) {
       const auto& m = machines[i % machines.size()];
-      b.add(bay + "/machine", "machine", "", m, RigidTransform::from_axis_angle(Vec3::UnitZ(), turn(rng), centre));
+      b.add(bay + "/machine", "machine", "", own(m), RigidTransform::from_axis_angle(Vec3::UnitZ(), turn(rng), centre));
       for (int k = 0; k < 6; ++k)  // bolts on the floor around it
         b.add(bay + "/bolt" + std::to_string(k), "bolt", "", bolt,
               RigidTransform::from_translation(centre + Vec3(-3000 + 1000 * k, -3500, 0)));

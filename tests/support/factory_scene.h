@@ -21,6 +21,9 @@ struct FactorySceneOptions {
   int near_misses = 10;                // crate pairs apart by near_miss_gap_mm
   double clash_depth_mm = 5.0;
   double near_miss_gap_mm = 2.0;
+  // Every robot link and machine gets its own mesh and BVH (a copy) instead of sharing one: the
+  // cost of a scene without instancing.
+  bool distinct_meshes = false;
 };
 
 struct KnownPair {
