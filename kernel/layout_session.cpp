@@ -1,0 +1,188 @@
+#include "kernel/layout_session.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace gk {
+namespace {
+
+// Statics wider than this many cells on some axis are kept in a short list, not the grid.
+constexpr double kMaxCellsPerAxis = 4.0;
+
+std::uint64_t cell_key(std::int64_t x, std::int64_t y, std::int64_t z) {
+  return static_cast<std::uint64_t>(x) * 73856093ULL ^ static_cast<std::uint64_t>(y) * 19349663ULL ^
+         static_cast<std::uint64_t>(z) * 83492791ULL;
+}
+
+OrientedBox obb_of(const MeshBvh& mesh) { return OrientedBox::fit(mesh.mesh().vertices()); }
+
+OrientedBox placed(const OrientedBox& local, const RigidTransform& pose) {
+  return {pose.apply(local.center), pose.rotation * local.axes, local.half_extent};
+}
+
+// The gap between the two boxes' projections on the unit axis (negative when they overlap on it):
+// a lower bound of their distance.
+double gap_along(const OrientedBox& a, const OrientedBox& b, const Vec3& axis) {
+  const double ra = a.half_extent.dot((a.axes.transpose() * axis).cwiseAbs());
+  const double rb = b.half_extent.dot((b.axes.transpose() * axis).cwiseAbs());
+  return std::abs(axis.dot(b.center - a.center)) - ra - rb;
+}
+
+// The best of the 15 box axes: the largest gap, and the axis.
+std::pair<double, Vec3> best_box_axis(const OrientedBox& a, const OrientedBox& b) {
+  std::pair<double, Vec3> best{-std::numeric_limits<double>::infinity(), Vec3::UnitX()};
+  auto consider = [&](const Vec3& axis) {
+    const double n = axis.norm();
+    if (!(n > 1e-9)) return;
+    const Vec3 u = axis / n;
+    const double g = gap_along(a, b, u);
+    if (g > best.first) best = {g, u};
+  };
+  for (int i = 0; i < 3; ++i) consider(a.axes.col(i));
+  for (int i = 0; i < 3; ++i) consider(b.axes.col(i));
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) consider(a.axes.col(i).cross(b.axes.col(j)));
+  return best;
+}
+
+int severity(Verdict v) {
+  switch (v) {
+    case Verdict::kClear: return 0;
+    case Verdict::kTouching: return 1;
+    case Verdict::kInconclusive: return 2;
+    case Verdict::kCollision: return 3;
+  }
+  return 3;
+}
+
+}  // namespace
+
+bool LayoutSession::CellRange::operator==(const CellRange& o) const {
+  return std::equal(lo, lo + 3, o.lo) && std::equal(hi, hi + 3, o.hi);
+}
+
+Result<std::unique_ptr<LayoutSession>> LayoutSession::create(std::vector<AuditObject> objects, std::uint32_t moving,
+                                                             double clearance_mm) {
+  if (moving >= objects.size()) return invalid_argument("moving", "no object " + std::to_string(moving));
+  if (!std::isfinite(clearance_mm) || clearance_mm < 0.0) return invalid_argument("clearance_mm", "must be a finite, non-negative distance");
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const std::string field = "objects[" + std::to_string(i) + "]";
+    if (!objects[i].mesh) return invalid_argument(field + ".mesh", "is missing");
+    if (!objects[i].pose.is_finite() || !objects[i].pose.is_rigid()) return invalid_argument(field + ".pose", "must be a finite rigid transform");
+  }
+  std::unique_ptr<LayoutSession> s(new LayoutSession());
+  s->objects_ = std::move(objects);
+  s->moving_ = moving;
+  s->clearance_mm_ = clearance_mm;
+  const std::size_t n = s->objects_.size();
+  s->boxes_.resize(n);
+  s->obbs_.resize(n);
+  s->stamp_.assign(n, 0);
+  // One oriented box per distinct mesh, placed per object.
+  std::unordered_map<const MeshBvh*, OrientedBox> local;
+  std::vector<double> diagonals;
+  for (std::size_t i = 0; i < n; ++i) {
+    const AuditObject& o = s->objects_[i];
+    auto it = local.find(o.mesh.get());
+    if (it == local.end()) it = local.emplace(o.mesh.get(), obb_of(*o.mesh)).first;
+    s->obbs_[i] = placed(it->second, o.pose);
+    s->boxes_[i] = transformed_box(o.mesh->root_bounds(), o.pose).expanded(0.5 * clearance_mm);
+    if (i != moving) diagonals.push_back(s->boxes_[i].diagonal().norm());
+  }
+  s->moving_local_obb_ = local.at(s->objects_[moving].mesh.get());
+  if (!diagonals.empty()) {
+    std::nth_element(diagonals.begin(), diagonals.begin() + static_cast<std::ptrdiff_t>(diagonals.size() / 2), diagonals.end());
+    s->cell_mm_ = std::max(2.0 * diagonals[diagonals.size() / 2], 1e-3);
+  }
+  for (std::uint32_t i = 0; i < n; ++i) {
+    if (i == moving) continue;
+    const Aabb& b = s->boxes_[i];
+    if ((b.diagonal().array() > kMaxCellsPerAxis * s->cell_mm_).any()) {
+      s->oversized_.push_back(i);
+      continue;
+    }
+    const CellRange r = s->range_of(b);
+    for (std::int64_t x = r.lo[0]; x <= r.hi[0]; ++x)
+      for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
+        for (std::int64_t z = r.lo[2]; z <= r.hi[2]; ++z) s->cells_[cell_key(x, y, z)].push_back(i);
+  }
+  return s;
+}
+
+LayoutSession::CellRange LayoutSession::range_of(const Aabb& box) const {
+  CellRange r;
+  for (int k = 0; k < 3; ++k) {
+    r.lo[k] = static_cast<std::int64_t>(std::floor(box.min[k] / cell_mm_));
+    r.hi[k] = static_cast<std::int64_t>(std::floor(box.max[k] / cell_mm_));
+  }
+  return r;
+}
+
+void LayoutSession::gather(const CellRange& range) {
+  gathered_ = oversized_;
+  if (++stamp_now_ == 0) {  // wrapped: clear the stamps
+    std::fill(stamp_.begin(), stamp_.end(), 0);
+    stamp_now_ = 1;
+  }
+  for (std::int64_t x = range.lo[0]; x <= range.hi[0]; ++x)
+    for (std::int64_t y = range.lo[1]; y <= range.hi[1]; ++y)
+      for (std::int64_t z = range.lo[2]; z <= range.hi[2]; ++z) {
+        auto it = cells_.find(cell_key(x, y, z));
+        if (it == cells_.end()) continue;
+        for (std::uint32_t id : it->second)
+          if (stamp_[id] != stamp_now_) {
+            stamp_[id] = stamp_now_;
+            gathered_.push_back(id);
+          }
+      }
+  last_range_ = range;
+}
+
+Result<FrameAnswer> LayoutSession::move_to(const RigidTransform& pose) {
+  if (!pose.is_finite() || !pose.is_rigid()) return invalid_argument("pose", "must be a finite rigid transform");
+  AuditObject& self = objects_[moving_];
+  self.pose = pose;
+  const Aabb box = transformed_box(self.mesh->root_bounds(), pose).expanded(0.5 * clearance_mm_);
+  // A huge moving box would sweep millions of cells: then every static object is a candidate.
+  const CellRange range = range_of(box);
+  double cells = 1.0;
+  for (int k = 0; k < 3; ++k) cells *= static_cast<double>(range.hi[k] - range.lo[k] + 1);
+  if (cells > 4096.0) {
+    gathered_.clear();
+    for (std::uint32_t i = 0; i < objects_.size(); ++i)
+      if (i != moving_) gathered_.push_back(i);
+    last_range_ = CellRange{};
+  } else if (!(range == last_range_)) {
+    gather(range);
+  }
+  const OrientedBox obb = placed(moving_local_obb_, pose);
+  FrameAnswer out;
+  for (std::uint32_t id : gathered_) {
+    if (!boxes_[id].overlaps(box)) continue;
+    ++out.candidates;
+    auto cached = separating_axis_.find(id);
+    if (cached != separating_axis_.end() && gap_along(obb, obbs_[id], cached->second) >= clearance_mm_ &&
+        gap_along(obb, obbs_[id], cached->second) > 0.0) {
+      ++out.axis_cache_hits;
+      continue;
+    }
+    const auto [gap, axis] = best_box_axis(obb, obbs_[id]);
+    if (gap >= clearance_mm_ && gap > 0.0) {
+      separating_axis_[id] = axis;
+      ++out.box_axis_clears;
+      continue;
+    }
+    ++out.exact_checks;
+    const AuditObject& other = objects_[id];
+    auto v = assess(*self.mesh, pose, *other.mesh, other.pose);
+    if (!v.ok()) return v.error();
+    const VerdictResult& r = v.value();
+    if (r.verdict == Verdict::kClear && r.distance_mm >= clearance_mm_) continue;
+    out.contacts.push_back({id, r.verdict, r.distance_mm, r.point_a, r.point_b});
+    if (severity(r.verdict) > severity(out.worst)) out.worst = r.verdict;
+  }
+  std::sort(out.contacts.begin(), out.contacts.end(), [](const FrameContact& l, const FrameContact& r) { return l.other < r.other; });
+  return out;
+}
+
+}  // namespace gk

@@ -1,0 +1,73 @@
+// Real-time layout (seed 000, scenario 1): one object dragged among many static ones, answered
+// per frame. Three levels keep a frame cheap:
+//  1. an incremental broad phase: static boxes sit in a uniform grid (oversized ones in a short
+//     list); the moving box's cell range is remapped each frame and the gathered candidates are
+//     reused while it stays the same;
+//  2. the separating axis of each candidate pair, cached from the previous frame: the oriented
+//     boxes of both objects projected on it usually still show a gap of at least the clearance
+//     (then the pair is clear without further work); otherwise all 15 box axes are tried and the
+//     best one is cached;
+//  3. the exact verdict and distance (kernel/contact_verdict) for the pairs left.
+#pragma once
+
+#include "kernel/contact_verdict.h"
+#include "kernel/oriented_box.h"
+#include "kernel/scene_audit.h"
+
+#include <cstdint>
+#include <memory>
+#include <unordered_map>
+#include <vector>
+
+namespace gk {
+
+struct FrameContact {
+  std::uint32_t other = 0;  // index of the static object
+  Verdict verdict = Verdict::kClear;
+  double distance_mm = 0.0;
+  Vec3 point = Vec3::Zero(), other_point = Vec3::Zero();  // witnesses (moving, static)
+};
+
+struct FrameAnswer {
+  Verdict worst = Verdict::kClear;       // over the contacts (CLEAR when none)
+  std::vector<FrameContact> contacts;    // collisions, touches, and pairs closer than the clearance
+  unsigned candidates = 0;               // static boxes met by the moving box (grown by the clearance)
+  unsigned axis_cache_hits = 0;          // ... cleared by last frame's separating axis
+  unsigned box_axis_clears = 0;          // ... cleared by a newly found box axis
+  unsigned exact_checks = 0;             // ... decided on the meshes
+};
+
+class LayoutSession {
+ public:
+  // `objects` are the scene; `moving` the one being dragged (its pose in `objects` is the start).
+  static Result<std::unique_ptr<LayoutSession>> create(std::vector<AuditObject> objects, std::uint32_t moving,
+                                                       double clearance_mm);
+  Result<FrameAnswer> move_to(const RigidTransform& pose);
+  const AuditObject& moving() const { return objects_[moving_]; }
+
+ private:
+  LayoutSession() = default;
+  struct CellRange {
+    std::int64_t lo[3] = {0, 0, 0}, hi[3] = {-1, -1, -1};
+    bool operator==(const CellRange& o) const;
+  };
+  CellRange range_of(const Aabb& box) const;
+  void gather(const CellRange& range);
+
+  std::vector<AuditObject> objects_;
+  std::uint32_t moving_ = 0;
+  double clearance_mm_ = 0.0;
+  std::vector<Aabb> boxes_;             // static objects' world boxes
+  std::vector<OrientedBox> obbs_;       // static objects' world oriented boxes
+  OrientedBox moving_local_obb_;        // in the moving mesh's frame
+  double cell_mm_ = 1.0;
+  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> cells_;
+  std::vector<std::uint32_t> oversized_;
+  CellRange last_range_;
+  std::vector<std::uint32_t> gathered_;  // static objects in the last cell range (and oversized)
+  std::vector<std::uint32_t> stamp_;
+  std::uint32_t stamp_now_ = 0;
+  std::unordered_map<std::uint32_t, Vec3> separating_axis_;  // per static object: last frame's axis
+};
+
+}  // namespace gk
