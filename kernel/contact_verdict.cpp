@@ -1,6 +1,8 @@
 #include "kernel/contact_verdict.h"
 
 #include "kernel/exact_predicates.h"
+#include "kernel/point_containment.h"
+#include "kernel/triangle_intersection.h"
 
 #include <cmath>
 
@@ -37,6 +39,25 @@ const char* to_string(Verdict v) {
     case Verdict::kInconclusive: return "INCONCLUSIVE";
   }
   return "INCONCLUSIVE";
+}
+
+bool triangle_pair_crosses(const MeshBvh& a, const RigidTransform& pose_a, std::uint32_t ta, const MeshBvh& b,
+                           const RigidTransform& pose_b, std::uint32_t tb, Vec3* point) {
+  if (ta >= a.mesh().triangle_count() || tb >= b.mesh().triangle_count()) return false;
+  if (a.mesh().is_degenerate(ta) || b.mesh().is_degenerate(tb)) return false;
+  const RigidTransform b_in_a = relative_transform(pose_a, pose_b);
+  const Triangle tri_a = a.mesh().triangle(ta);
+  const Triangle local_b = b.mesh().triangle(tb);
+  const Triangle tri_b = {b_in_a.apply(local_b[0]), b_in_a.apply(local_b[1]), b_in_a.apply(local_b[2])};
+  const TriangleIntersection hit = intersect_triangles(tri_a, tri_b);
+  if (!hit.intersects) return false;
+  Contact c;
+  c.segment_start = hit.segment_start;
+  c.segment_end = hit.segment_end;
+  const bool oriented = a.mesh().is_closed_oriented() && b.mesh().is_closed_oriented();
+  if (oriented && is_outside_contact(tri_a, tri_b, c)) return false;
+  if (point) *point = pose_a.apply(0.5 * (hit.segment_start + hit.segment_end));
+  return true;
 }
 
 double winding_number(const TriangleMesh& mesh, const Vec3& point) {
@@ -80,6 +101,7 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
         continue;
       }
       if (!oriented) {
+        if (out.first_crossing < 0) out.first_crossing = static_cast<int>(&c - col.contacts.data());
         ++out.crossing_pairs;
         continue;
       }
@@ -89,7 +111,10 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
       Contact local = c;
       local.segment_start = world_to_a.apply(c.segment_start);
       local.segment_end = world_to_a.apply(c.segment_end);
-      if (!is_outside_contact(ta, tb, local)) ++out.crossing_pairs;
+      if (!is_outside_contact(ta, tb, local)) {
+        if (out.first_crossing < 0) out.first_crossing = static_cast<int>(&c - col.contacts.data());
+        ++out.crossing_pairs;
+      }
     }
     out.contacts = std::move(col.contacts);
     if (out.crossing_pairs > 0) {
@@ -109,9 +134,15 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
     return out;
   }
 
-  auto measured = distance(a, pose_a, b, pose_b);
+  DistanceRequest dreq;
+  if (options.distance_upper_bound_mm > options.contact_tolerance_mm) dreq.upper_bound_mm = options.distance_upper_bound_mm;
+  auto measured = distance(a, pose_a, b, pose_b, dreq);
   if (!measured.ok()) return measured.error();
-  const DistanceResult& d = measured.value();
+  DistanceResult& d = measured.value();
+  if (!d.found && std::isfinite(dreq.upper_bound_mm)) {
+    d.distance_mm = dreq.upper_bound_mm;
+    out.distance_is_lower_bound = true;
+  }
   out.distance_mm = d.distance_mm;
   out.point_a = d.point_a;
   out.point_b = d.point_b;
@@ -123,11 +154,15 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
     const RigidTransform b_in_a = relative_transform(pose_a, pose_b);
     const Vec3 b_vertex_in_a = b_in_a.apply(b.mesh().vertices()[b.mesh().faces()[0][0]]);
     const Vec3 a_vertex_in_b = b_in_a.inverse().apply(a.mesh().vertices()[a.mesh().faces()[0][0]]);
-    const bool b_inside_a = a.mesh().bounds().expanded(d.distance_mm).overlaps(Aabb{b_vertex_in_a, b_vertex_in_a}) &&
-                            std::fabs(winding_number(a.mesh(), b_vertex_in_a)) > 0.5;
-    const bool a_inside_b = !b_inside_a &&
-                            b.mesh().bounds().expanded(d.distance_mm).overlaps(Aabb{a_vertex_in_b, a_vertex_in_b}) &&
-                            std::fabs(winding_number(b.mesh(), a_vertex_in_b)) > 0.5;
+    // Ray parity through the BVH decides it in O(log n); the winding number (O(n)) only when
+    // every ray was degenerate.
+    auto inside = [](const MeshBvh& m, const Vec3& p) {
+      if (!m.mesh().bounds().overlaps(Aabb{p, p})) return false;
+      if (const auto parity = point_inside(m, p)) return *parity;
+      return std::fabs(winding_number(m.mesh(), p)) > 0.5;
+    };
+    const bool b_inside_a = inside(a, b_vertex_in_a);
+    const bool a_inside_b = !b_inside_a && inside(b, a_vertex_in_b);
     if (b_inside_a || a_inside_b) {
       out.verdict = Verdict::kCollision;
       out.reason = b_inside_a ? "mesh B lies inside mesh A" : "mesh A lies inside mesh B";
@@ -139,7 +174,7 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
     out.reason = "apart by no more than the contact tolerance";
   } else {
     out.verdict = Verdict::kClear;
-    out.reason = "apart by " + std::to_string(d.distance_mm) + " mm";
+    out.reason = (out.distance_is_lower_bound ? "apart by at least " : "apart by ") + std::to_string(d.distance_mm) + " mm";
   }
   return out;
 }

@@ -17,6 +17,7 @@
 #include "kernel/mesh_collision.h"
 #include "kernel/mesh_distance.h"
 
+#include <limits>
 #include <string>
 
 namespace gk {
@@ -28,21 +29,34 @@ const char* to_string(Verdict v);
 struct VerdictOptions {
   double contact_tolerance_mm = tolerances::kContactMm;
   std::size_t max_contacts = 10000;  // contacts reported at most
+  // Distances at or beyond this do not matter to the caller (a clearance): the distance query is
+  // pruned there, and a pair at least this far apart comes back CLEAR with distance_mm set to the
+  // bound and distance_is_lower_bound. [mm]
+  double distance_upper_bound_mm = std::numeric_limits<double>::infinity();
 };
 
 struct VerdictResult {
   Verdict verdict = Verdict::kInconclusive;
   std::string reason;
   double distance_mm = 0.0;  // minimum distance; 0 when in contact
+  bool distance_is_lower_bound = false;  // apart by at least distance_mm (VerdictOptions' bound)
   Vec3 point_a = Vec3::Zero();
   Vec3 point_b = Vec3::Zero();
   std::vector<Contact> contacts;
   std::size_t crossing_pairs = 0;
+  int first_crossing = -1;  // index in contacts of the first crossing pair (COLLISION by crossing)
   QueryStats stats;
 };
 
 Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
                              const RigidTransform& pose_b, const VerdictOptions& options = {});
+
+// Do triangle ta of A and triangle tb of B (mesh indices) cross at these poses, in the sense
+// above (intersect, and not as a contact from outside when both meshes are closed and oriented)?
+// A dragged object's collision found last frame is usually still there: checking its crossing pair
+// first answers COLLISION at the cost of one exact triangle test. `point` gets the crossing's midpoint.
+bool triangle_pair_crosses(const MeshBvh& a, const RigidTransform& pose_a, std::uint32_t ta, const MeshBvh& b,
+                           const RigidTransform& pose_b, std::uint32_t tb, Vec3* point = nullptr);
 
 // Generalised winding number of a closed mesh around a point in the mesh's frame (about 1 inside,
 // 0 outside). O(triangles).

@@ -8,6 +8,9 @@ namespace {
 
 // Statics wider than this many cells on some axis are kept in a short list, not the grid.
 constexpr double kMaxCellsPerAxis = 4.0;
+// A frame reports where two objects touch, not every crossing triangle pair: a few dozen contacts
+// locate it, and collecting thousands would cost a deep overlap milliseconds.
+constexpr std::size_t kContactsPerPair = 32;
 
 std::uint64_t cell_key(std::int64_t x, std::int64_t y, std::int64_t z) {
   return static_cast<std::uint64_t>(x) * 73856093ULL ^ static_cast<std::uint64_t>(y) * 19349663ULL ^
@@ -172,11 +175,27 @@ Result<FrameAnswer> LayoutSession::move_to(const RigidTransform& pose) {
       ++out.box_axis_clears;
       continue;
     }
-    ++out.exact_checks;
     const AuditObject& other = objects_[id];
-    auto v = assess(*self.mesh, pose, *other.mesh, other.pose);
+    auto crossed = crossing_.find(id);
+    Vec3 where;
+    if (crossed != crossing_.end() &&
+        triangle_pair_crosses(*self.mesh, pose, crossed->second.first, *other.mesh, other.pose, crossed->second.second, &where)) {
+      ++out.crossing_cache_hits;
+      out.contacts.push_back({id, Verdict::kCollision, 0.0, where, where});
+      out.worst = Verdict::kCollision;
+      continue;
+    }
+    ++out.exact_checks;
+    VerdictOptions options;
+    options.max_contacts = kContactsPerPair;
+    options.distance_upper_bound_mm = clearance_mm_;
+    auto v = assess(*self.mesh, pose, *other.mesh, other.pose, options);
     if (!v.ok()) return v.error();
     const VerdictResult& r = v.value();
+    if (r.first_crossing >= 0)
+      crossing_[id] = {r.contacts[r.first_crossing].triangle_a, r.contacts[r.first_crossing].triangle_b};
+    else
+      crossing_.erase(id);
     if (r.verdict == Verdict::kClear && r.distance_mm >= clearance_mm_) continue;
     out.contacts.push_back({id, r.verdict, r.distance_mm, r.point_a, r.point_b});
     if (severity(r.verdict) > severity(out.worst)) out.worst = r.verdict;

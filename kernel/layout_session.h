@@ -7,7 +7,9 @@
 //     boxes of both objects projected on it usually still show a gap of at least the clearance
 //     (then the pair is clear without further work); otherwise all 15 box axes are tried and the
 //     best one is cached;
-//  3. the exact verdict and distance (kernel/contact_verdict) for the pairs left.
+//  3. for a pair that collided last frame, the triangle pair that crossed then: if it still
+//     crosses (one exact triangle test), the pair is a COLLISION there;
+//  4. the exact verdict and distance (kernel/contact_verdict) for the pairs left.
 #pragma once
 
 #include "kernel/contact_verdict.h"
@@ -34,6 +36,7 @@ struct FrameAnswer {
   unsigned candidates = 0;               // static boxes met by the moving box (grown by the clearance)
   unsigned axis_cache_hits = 0;          // ... cleared by last frame's separating axis
   unsigned box_axis_clears = 0;          // ... cleared by a newly found box axis
+  unsigned crossing_cache_hits = 0;      // ... found still colliding at last frame's crossing triangles
   unsigned exact_checks = 0;             // ... decided on the meshes
 };
 
@@ -68,6 +71,7 @@ class LayoutSession {
   std::vector<std::uint32_t> stamp_;
   std::uint32_t stamp_now_ = 0;
   std::unordered_map<std::uint32_t, Vec3> separating_axis_;  // per static object: last frame's axis
+  std::unordered_map<std::uint32_t, std::pair<std::uint32_t, std::uint32_t>> crossing_;  // last frame's crossing triangles
 };
 
 }  // namespace gk

@@ -2,6 +2,7 @@
 // moving one mesh along the witness direction by the distance minus or plus a little flips it.
 #include "kernel/contact_verdict.h"
 #include "kernel/mesh_bvh.h"
+#include "kernel/point_containment.h"
 #include "tests/support/random_meshes.h"
 
 #include <gtest/gtest.h>
@@ -98,6 +99,36 @@ TEST(ContactVerdict, MovingByTheDistanceAlongTheWitnessFlipsTheVerdict) {
     ++checked;
   }
   EXPECT_EQ(checked, 60);
+}
+
+TEST(PointContainment, RayParityAgreesWithTheWindingNumber) {
+  // Oracle: the winding number (O(n), no ray). Random points around rough blobs, and lattice
+  // points on a box's faces, edges and corners, where rays graze edges and must be retried.
+  testing::Rng rng(3);
+  std::uniform_real_distribution<double> coord(-60.0, 60.0);
+  for (int blob = 0; blob < 3; ++blob) {
+    const auto mesh = MeshBvh::build(testing::share(testing::random_closed_blob(rng, 4, 50.0, 0.4, Vec3(1, 2, 3)))).value();
+    for (int i = 0; i < 2000; ++i) {
+      const Vec3 p(coord(rng), coord(rng), coord(rng));
+      const auto parity = point_inside(*mesh, p);
+      ASSERT_TRUE(parity.has_value());
+      EXPECT_EQ(*parity, std::fabs(winding_number(mesh->mesh(), p)) > 0.5) << p.transpose();
+    }
+  }
+  const auto box = MeshBvh::build(testing::share(testing::box_mesh(Vec3(0, 0, 0), Vec3(4, 4, 4)))).value();
+  for (int x = -1; x <= 5; ++x)
+    for (int y = -1; y <= 5; ++y)
+      for (int z = -1; z <= 5; ++z) {
+        const Vec3 p(x, y, z);
+        const auto parity = point_inside(*box, p);
+        const bool on_surface = (p.minCoeff() >= 0 && p.maxCoeff() <= 4) && (p.minCoeff() == 0 || p.maxCoeff() == 4);
+        if (on_surface) {
+          EXPECT_FALSE(parity.has_value()) << p.transpose();  // on the surface: the caller decides
+        } else {
+          ASSERT_TRUE(parity.has_value()) << p.transpose();
+          EXPECT_EQ(*parity, p.minCoeff() > 0 && p.maxCoeff() < 4) << p.transpose();
+        }
+      }
 }
 
 TEST(ContactVerdict, ToStringNamesEveryVerdict) {
