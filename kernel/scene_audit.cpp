@@ -236,6 +236,10 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
     state[i] = clash ? 2 : 1;
     ++done;
     if (clash) ++clashes;
+    if (clash && options.on_clash) {
+      std::lock_guard<std::mutex> lock(report_mutex);
+      options.on_clash(c);
+    }
     if (options.on_progress) {
       {
         std::lock_guard<std::mutex> lock(report_mutex);

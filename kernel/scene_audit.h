@@ -82,6 +82,7 @@ struct AuditOptions {
   std::vector<std::uint32_t> only_objects;
   const std::atomic<bool>* cancel = nullptr;
   std::function<void(const AuditProgress&)> on_progress;  // called from worker threads, serialised
+  std::function<void(const PairClash&)> on_clash;          // each clash as found (any order), serialised
   double progress_interval_s = 0.2;
 };
 

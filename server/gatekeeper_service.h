@@ -22,6 +22,7 @@ namespace pb = ::gatekeeper::v1;
 struct ServiceOptions {
   int workers = 2;                 // clearance and upload-finishing threads
   std::size_t max_queued = 64;     // beyond this, RESOURCE_EXHAUSTED
+  int audit_threads = 2;           // threads of one audit job (its tiles, then its pairs)
   std::string version = "0.1.0";
 };
 

@@ -86,6 +86,7 @@ int main(int argc, char** argv) {
   }
   gk::server::ServiceOptions options;
   options.workers = config.workers;
+  options.audit_threads = config.workers;
   options.max_queued = static_cast<std::size_t>(config.queue);
   auto scenes = gk::server::SceneStore::open(config.data_dir);
   if (!scenes.ok()) {

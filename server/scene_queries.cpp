@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <map>
+#include <tuple>
 
 namespace gk::server {
 namespace {
@@ -64,60 +66,112 @@ void AuditJob::update(const std::function<void(AuditSnapshot&)>& change) {
     std::lock_guard<std::mutex> lock(mutex_);
     change(state_);
     state_.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
-    if (state_.pairs_done > 0 && state_.pairs_total > state_.pairs_done)
-      state_.eta_s = state_.elapsed_s / static_cast<double>(state_.pairs_done) *
-                     static_cast<double>(state_.pairs_total - state_.pairs_done);
-    else
-      state_.eta_s = 0.0;
   }
   changed_.notify_all();
 }
 
+void AuditJob::fail(const Error& error) {
+  update([&](AuditSnapshot& s) {
+    s.status = AuditStatus::kFailed;
+    s.message = error.to_string();
+  });
+}
+
+std::vector<AuditedObject> AuditJob::objects() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return objects_;
+}
+
 void AuditJob::run(PartRegistry& parts) {
-  // Broad phase: every pair whose boxes, grown by the clearance, overlap (the factory issue
-  // brings sweep-and-prune, tiles and parallelism).
-  std::vector<Placed> placed;
+  // The scene's objects in id order; one mesh and BVH per part, shared by every copy.
+  std::vector<AuditObject> objects;
+  std::vector<const SceneObjectRecord*> records;
+  std::vector<AuditedObject> audited;
+  std::map<std::string, std::uint32_t> index_of;
   for (const auto& [id, o] : scene_.objects) {
     auto p = place(o, parts);
-    if (!p.ok()) {
-      update([&](AuditSnapshot& s) {
-        s.status = AuditStatus::kFailed;
-        s.message = p.error().to_string();
-      });
-      return;
-    }
-    placed.push_back(p.value());
+    if (!p.ok()) return fail(p.error());
+    index_of[id] = static_cast<std::uint32_t>(objects.size());
+    objects.push_back({o.name, o.category, o.group, p.value().part->bvh, p.value().pose});
+    records.push_back(&o);
+    audited.push_back({o.id, o.name, o.category, p.value().box});
   }
-  std::vector<std::pair<std::size_t, std::size_t>> pairs;
-  for (std::size_t i = 0; i < placed.size(); ++i)
-    for (std::size_t j = i + 1; j < placed.size(); ++j)
-      if (placed[i].box.expanded(clearance_mm_).overlaps(placed[j].box)) pairs.emplace_back(i, j);
-  update([&](AuditSnapshot& s) { s.pairs_total = pairs.size(); });
-  for (const auto& [i, j] : pairs) {
-    if (cancelled_) {
-      update([](AuditSnapshot& s) {
-        s.status = AuditStatus::kCancelled;
-        s.message = "cancelled; the clashes found so far are kept";
-      });
-      return;
-    }
-    auto v = assess(*placed[i].part->bvh, placed[i].pose, *placed[j].part->bvh, placed[j].pose);
-    ClashRecord clash;
-    bool is_clash = false;
-    if (!v.ok()) {
-      clash = {placed[i].object->id, placed[j].object->id, Verdict::kInconclusive, 0.0, Vec3::Zero(), 0};
-      is_clash = true;
-    } else if (v.value().verdict != Verdict::kClear || v.value().distance_mm < clearance_mm_) {
-      clash = {placed[i].object->id, placed[j].object->id, v.value().verdict, v.value().distance_mm, v.value().point_a,
-               static_cast<unsigned>(v.value().contacts.size())};
-      is_clash = true;
-    }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    objects_ = audited;
+  }
+  auto to_record = [&](const PairClash& c) {
+    const SceneObjectRecord& a = *records[c.a];
+    const SceneObjectRecord& b = *records[c.b];
+    return ClashRecord{a.id, b.id, a.name, b.name, a.category, b.category, c};
+  };
+  AuditOptions options;
+  options.clearance_mm = request_.clearance_mm;
+  options.rules = request_.rules;
+  options.tile_mm = request_.tile_mm;
+  options.threads = request_.threads;
+  options.compute_depth = request_.compute_depth;
+  options.cancel = &cancelled_;
+  options.on_progress = [this](const AuditProgress& p) {
     update([&](AuditSnapshot& s) {
-      ++s.pairs_done;
-      if (is_clash) s.clashes.push_back(clash);
+      s.tiles_total = p.tiles_total;
+      s.tiles_done = p.tiles_done;
+      s.pairs_total = p.pairs_total;
+      s.pairs_done = p.pairs_done;
+      s.eta_s = p.eta_s;
     });
+  };
+  options.on_clash = [&](const PairClash& c) {
+    ClashRecord r = to_record(c);
+    update([&](AuditSnapshot& s) { s.clashes.push_back(std::move(r)); });
+  };
+  Result<AuditResult> result = Error{};
+  if (baseline_) {
+    // Re-audit: objects new or changed since the baseline's snapshot are recomputed; the
+    // baseline's other clashes carry over (re-indexed to this snapshot).
+    const AuditSnapshot base = baseline_->snapshot();
+    const SceneRecord& before = baseline_->scene();
+    std::vector<std::uint32_t> changed;
+    for (const auto& [id, o] : scene_.objects) {
+      auto it = before.objects.find(id);
+      const bool same = it != before.objects.end() && it->second.part_id == o.part_id && it->second.category == o.category &&
+                        it->second.group == o.group && it->second.pose.translation == o.pose.translation &&
+                        it->second.pose.axis == o.pose.axis && it->second.pose.angle_deg == o.pose.angle_deg;
+      if (!same) changed.push_back(index_of[id]);
+    }
+    AuditResult previous;
+    for (const ClashRecord& r : base.clashes) {
+      auto ia = index_of.find(r.a), ib = index_of.find(r.b);
+      if (ia == index_of.end() || ib == index_of.end()) continue;  // removed since
+      PairClash c = r.clash;
+      c.a = std::min(ia->second, ib->second);
+      c.b = std::max(ia->second, ib->second);
+      previous.clashes.push_back(c);
+    }
+    std::sort(previous.clashes.begin(), previous.clashes.end(),
+              [](const PairClash& l, const PairClash& r) { return std::tie(l.a, l.b) < std::tie(r.a, r.b); });
+    update([](AuditSnapshot& s) { s.reaudit = true; });
+    result = reaudit_scene(objects, previous, changed, options);
+  } else {
+    result = audit_scene(objects, options);
   }
-  update([](AuditSnapshot& s) { s.status = AuditStatus::kDone; });
+  if (!result.ok()) return fail(result.error());
+  const AuditResult& r = result.value();
+  std::vector<ClashRecord> ordered;
+  for (const PairClash& c : r.clashes) ordered.push_back(to_record(c));
+  update([&](AuditSnapshot& s) {
+    s.clashes = std::move(ordered);
+    s.pairs_done = r.pairs_done;
+    s.candidate_pairs = r.candidate_pairs;
+    s.excluded_by_rules = r.excluded_by_rules;
+    s.objects = r.objects;
+    s.triangles = r.triangles;
+    s.broad_s = r.times.broad_s;
+    s.narrow_s = r.times.narrow_s;
+    s.eta_s = 0.0;
+    s.status = r.cancelled ? AuditStatus::kCancelled : AuditStatus::kDone;
+    s.message = r.cancelled ? "cancelled; the clashes of the pairs finished are kept" : "";
+  });
 }
 
 AuditSnapshot AuditJob::snapshot() const {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "kernel/contact_verdict.h"
+#include "kernel/scene_audit.h"
 #include "server/part_registry.h"
 #include "server/scene_store.h"
 
@@ -36,43 +37,68 @@ struct MoveOutcome {
 Result<MoveOutcome> object_contacts(const SceneRecord& scene, const std::string& object_id, double clearance_mm,
                                     PartRegistry& parts);
 
+// What an audit is asked to do (StartAuditRequest, checked).
+struct AuditRequest {
+  double clearance_mm = 0.0;
+  std::vector<ContactRule> rules;
+  double tile_mm = 50000.0;
+  int threads = 2;
+  bool compute_depth = false;
+};
+
+// A clash between two scene objects: the kernel's answer and who they are.
 struct ClashRecord {
-  std::string a, b;
-  Verdict verdict = Verdict::kClear;
-  double distance_mm = 0.0;
-  Vec3 point = Vec3::Zero();
-  unsigned contact_pairs = 0;
+  std::string a, b;  // object ids, a < b
+  std::string name_a, name_b, category_a, category_b;
+  PairClash clash;   // a/b there are indices into the audited object list
+};
+
+// An audited object as the report shows it.
+struct AuditedObject {
+  std::string id, name, category;
+  Aabb box;
 };
 
 enum class AuditStatus { kRunning, kDone, kCancelled, kFailed };
 
 struct AuditSnapshot {
   AuditStatus status = AuditStatus::kRunning;
+  unsigned long long tiles_total = 0, tiles_done = 0;
   unsigned long long pairs_total = 0, pairs_done = 0;
-  std::vector<ClashRecord> clashes;
+  std::vector<ClashRecord> clashes;  // as found while running; in (a, b) order once ended
   double elapsed_s = 0.0, eta_s = 0.0;
   std::string message;
+  unsigned long long candidate_pairs = 0, excluded_by_rules = 0, objects = 0, triangles = 0;
+  double broad_s = 0.0, narrow_s = 0.0;
+  bool reaudit = false;
 };
 
-// One audit job: runs on a worker, can be cancelled, keeps its results (partial if cancelled).
+// One audit job (kernel/scene_audit on the scene's snapshot): runs on a worker, can be cancelled,
+// keeps its results (partial if cancelled). With a finished baseline job it is a re-audit.
 class AuditJob {
  public:
-  AuditJob(SceneRecord scene, double clearance_mm) : scene_(std::move(scene)), clearance_mm_(clearance_mm) {}
+  AuditJob(SceneRecord scene, AuditRequest request, std::shared_ptr<const AuditJob> baseline = nullptr)
+      : scene_(std::move(scene)), request_(std::move(request)), baseline_(std::move(baseline)) {}
   void run(PartRegistry& parts);
   void cancel() { cancelled_ = true; }
   AuditSnapshot snapshot() const;
   // Waits until the progress changes (or timeout); returns the snapshot.
   AuditSnapshot wait_for_change(unsigned long long seen_done, AuditStatus seen_status, std::chrono::milliseconds timeout) const;
+  const SceneRecord& scene() const { return scene_; }
+  std::vector<AuditedObject> objects() const;
 
  private:
   void update(const std::function<void(AuditSnapshot&)>& change);
+  void fail(const Error& error);
   SceneRecord scene_;
-  double clearance_mm_;
+  AuditRequest request_;
+  std::shared_ptr<const AuditJob> baseline_;
   std::atomic<bool> cancelled_{false};
   std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
   mutable std::mutex mutex_;
   mutable std::condition_variable changed_;
   AuditSnapshot state_;
+  std::vector<AuditedObject> objects_;
 };
 
 class AuditJobs {

@@ -1,6 +1,8 @@
 // The scene and audit RPCs of GatekeeperService: scenes a layout tool edits and drags objects
 // through, and interference audits of a scene run as jobs.
 #include "server/gatekeeper_service.h"
+#include "server/audit_report.h"
+#include "server/audit_report_page.h"
 #include "server/proto_convert.h"
 #include "server/rpc_helpers.h"
 
@@ -31,6 +33,7 @@ void scene_to_proto(const SceneRecord& scene, pb::SceneInfo* out) {
     p->set_name(o.name);
     p->set_category(o.category);
     p->set_part_id(o.part_id);
+    p->set_group(o.group);
     to_proto(o.pose.translation, p->mutable_pose()->mutable_translation());
     to_proto(o.pose.axis, p->mutable_pose()->mutable_rotation_axis());
     p->mutable_pose()->set_rotation_deg(o.pose.angle_deg);
@@ -56,6 +59,8 @@ void progress_to_proto(const std::string& job_id, const AuditSnapshot& s, pb::Au
   out->set_elapsed_s(s.elapsed_s);
   out->set_eta_s(s.eta_s);
   out->set_message(s.message);
+  out->set_tiles_total(s.tiles_total);
+  out->set_tiles_done(s.tiles_done);
 }
 
 // The drag stream: each move is stored and answered with its contacts before the next is read.
@@ -171,7 +176,7 @@ grpc::ServerUnaryReactor* GatekeeperService::PutObject(grpc::CallbackServerConte
   if (!part.ok()) return finish(ctx, stats_, "PutObject", t0, to_status(Error{part.error().code, "object.part_id", part.error().message}));
   auto pose = to_stored_pose(in.pose(), "object.pose");
   if (!pose.ok()) return finish(ctx, stats_, "PutObject", t0, to_status(pose.error()));
-  auto stored = scenes_.put(request->scene_id(), {in.object_id(), in.name(), in.category(), in.part_id(), pose.value()});
+  auto stored = scenes_.put(request->scene_id(), {in.object_id(), in.name(), in.category(), in.part_id(), pose.value(), in.group()});
   if (!stored.ok()) return finish(ctx, stats_, "PutObject", t0, to_status(stored.error()));
   pb::MoveObjectRequest as_move;
   as_move.set_scene_id(request->scene_id());
@@ -212,11 +217,21 @@ grpc::ServerUnaryReactor* GatekeeperService::GetScene(grpc::CallbackServerContex
 grpc::ServerUnaryReactor* GatekeeperService::StartAudit(grpc::CallbackServerContext* ctx, const pb::StartAuditRequest* request,
                                                         pb::AuditJob* response) {
   const auto t0 = Clock::now();
-  if (!std::isfinite(request->clearance_mm()) || request->clearance_mm() < 0.0)
-    return finish(ctx, stats_, "StartAudit", t0, {grpc::StatusCode::INVALID_ARGUMENT, "clearance_mm: must be >= 0"});
+  auto checked = to_audit_request(*request, options_.audit_threads);
+  if (!checked.ok()) return finish(ctx, stats_, "StartAudit", t0, to_status(checked.error()));
   auto scene = scenes_.get(request->scene_id());
   if (!scene.ok()) return finish(ctx, stats_, "StartAudit", t0, to_status(scene.error()));
-  auto job = std::make_shared<AuditJob>(scene.value(), request->clearance_mm());
+  std::shared_ptr<const AuditJob> baseline;
+  if (!request->baseline_job_id().empty()) {
+    auto base = audits_.get(request->baseline_job_id());
+    if (!base.ok()) return finish(ctx, stats_, "StartAudit", t0, to_status(Error{base.error().code, "baseline_job_id", base.error().message}));
+    if (base.value()->scene().id != request->scene_id())
+      return finish(ctx, stats_, "StartAudit", t0, {grpc::StatusCode::INVALID_ARGUMENT, "baseline_job_id: audited another scene"});
+    if (base.value()->snapshot().status != AuditStatus::kDone)
+      return finish(ctx, stats_, "StartAudit", t0, {grpc::StatusCode::FAILED_PRECONDITION, "baseline_job_id: has not finished"});
+    baseline = base.value();
+  }
+  auto job = std::make_shared<AuditJob>(scene.value(), checked.value(), baseline);
   PartRegistry* parts = &parts_;
   if (!pool_.try_submit([job, parts] { job->run(*parts); }))
     return finish(ctx, stats_, "StartAudit", t0, {grpc::StatusCode::RESOURCE_EXHAUSTED, "audit queue full: retry later"});
@@ -254,15 +269,8 @@ grpc::ServerUnaryReactor* GatekeeperService::GetAuditReport(grpc::CallbackServer
   if (!job.ok()) return finish(ctx, stats_, "GetAuditReport", t0, to_status(job.error()));
   const AuditSnapshot snapshot = job.value()->snapshot();
   progress_to_proto(request->job_id(), snapshot, response->mutable_progress());
-  for (const ClashRecord& c : snapshot.clashes) {
-    pb::Clash* out = response->add_clashes();
-    out->set_object_a(c.a);
-    out->set_object_b(c.b);
-    out->set_verdict(to_proto(c.verdict));
-    out->set_distance_mm(c.distance_mm);
-    to_proto(c.point, out->mutable_point());
-    out->set_contact_pairs(c.contact_pairs);
-  }
+  report_to_proto(snapshot, response);
+  if (request->html()) response->set_html(audit_report_page(*response, job.value()->scene().name, job.value()->objects()));
   return finish(ctx, stats_, "GetAuditReport", t0, grpc::Status::OK);
 }
 

@@ -34,6 +34,8 @@ Result<std::unique_ptr<SceneStore>> SceneStore::open(const std::string& director
     sqlite3_free(err);
     return storage_error("cannot prepare the scene tables: " + message);
   }
+  // Objects gained a group after the first release: databases written before get the column.
+  sqlite3_exec(store->db_, "ALTER TABLE scene_objects ADD COLUMN grp TEXT NOT NULL DEFAULT ''", nullptr, nullptr, nullptr);
   sqlite3_stmt* stmt = nullptr;
   sqlite3_prepare_v2(store->db_, "SELECT id, name FROM scenes", -1, &stmt, nullptr);
   while (sqlite3_step(stmt) == SQLITE_ROW) {
@@ -43,7 +45,7 @@ Result<std::unique_ptr<SceneStore>> SceneStore::open(const std::string& director
     store->scenes_[s.id] = s;
   }
   sqlite3_finalize(stmt);
-  sqlite3_prepare_v2(store->db_, "SELECT scene_id, id, name, category, part_id, tx, ty, tz, ax, ay, az, angle FROM scene_objects",
+  sqlite3_prepare_v2(store->db_, "SELECT scene_id, id, name, category, part_id, tx, ty, tz, ax, ay, az, angle, grp FROM scene_objects",
                      -1, &stmt, nullptr);
   while (sqlite3_step(stmt) == SQLITE_ROW) {
     SceneObjectRecord o;
@@ -57,6 +59,7 @@ Result<std::unique_ptr<SceneStore>> SceneStore::open(const std::string& director
       o.pose.axis[k] = sqlite3_column_double(stmt, 8 + k);
     }
     o.pose.angle_deg = sqlite3_column_double(stmt, 11);
+    o.group = reinterpret_cast<const char*>(sqlite3_column_text(stmt, 12));
     store->scenes_[scene].objects[o.id] = o;
   }
   sqlite3_finalize(stmt);
@@ -100,7 +103,8 @@ Result<SceneRecord> SceneStore::get(const std::string& scene_id) const {
 
 Result<bool> SceneStore::write_object(const std::string& scene_id, const SceneObjectRecord& o) {
   sqlite3_stmt* stmt = nullptr;
-  sqlite3_prepare_v2(db_, "INSERT OR REPLACE INTO scene_objects VALUES (?,?,?,?,?,?,?,?,?,?,?,?)", -1, &stmt, nullptr);
+  sqlite3_prepare_v2(db_, "INSERT OR REPLACE INTO scene_objects (scene_id, id, name, category, part_id, tx, ty, tz, ax, ay, az, angle, grp)"
+                     " VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?)", -1, &stmt, nullptr);
   sqlite3_bind_text(stmt, 1, scene_id.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_text(stmt, 2, o.id.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_text(stmt, 3, o.name.c_str(), -1, SQLITE_TRANSIENT);
@@ -111,6 +115,7 @@ Result<bool> SceneStore::write_object(const std::string& scene_id, const SceneOb
     sqlite3_bind_double(stmt, 9 + k, o.pose.axis[k]);
   }
   sqlite3_bind_double(stmt, 12, o.pose.angle_deg);
+  sqlite3_bind_text(stmt, 13, o.group.c_str(), -1, SQLITE_TRANSIENT);
   const int rc = sqlite3_step(stmt);
   sqlite3_finalize(stmt);
   if (rc != SQLITE_DONE) return storage_error("cannot record the object");

@@ -25,6 +25,7 @@ struct StoredPose {
 struct SceneObjectRecord {
   std::string id, name, category, part_id;
   StoredPose pose;
+  std::string group;
 };
 
 struct SceneRecord {

@@ -1,0 +1,239 @@
+// The audit service end to end: a small factory put into a scene through the RPCs, audited with
+// rules and tiles, compared with assessing every pair in process; a re-audit after a move equals a
+// fresh audit; the HTML report loads, draws and lists the clashes in headless Chromium.
+#include "kernel/contact_verdict.h"
+#include "kernel/mesh_bvh.h"
+#include "kernel/scene_audit.h"
+#include "mesh_io/mesh_file_reader.h"
+#include "tests/server/daemon_fixture.h"
+#include "tests/support/random_meshes.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <set>
+
+namespace gk {
+namespace {
+
+namespace pb = ::gatekeeper::v1;
+using testing::Daemon;
+
+struct Placed {
+  std::string name, category, group, part;
+  Vec3 at;
+  double turn_deg = 0.0;
+};
+
+std::string box_obj(double sx, double sy, double sz) {
+  std::string obj;
+  for (int k = 0; k < 8; ++k)
+    obj += "v " + std::to_string((k & 1) ? sx : 0.0) + " " + std::to_string((k & 2) ? sy : 0.0) + " " + std::to_string((k & 4) ? sz : 0.0) + "\n";
+  return obj + "f 1 3 4\nf 1 4 2\nf 5 6 8\nf 5 8 7\nf 1 2 6\nf 1 6 5\nf 3 7 8\nf 3 8 4\nf 1 5 7\nf 1 7 3\nf 2 4 8\nf 2 8 6\n";
+}
+
+std::string upload(pb::Gatekeeper::Stub& stub, const std::string& bytes, const std::string& format) {
+  pb::PartInfo info;
+  EXPECT_TRUE(testing::upload_part(stub, bytes, format, &info).ok());
+  return info.part_id();
+}
+
+pb::Pose pose_of(const Placed& p) {
+  pb::Pose pose;
+  pose.mutable_translation()->set_x_mm(p.at.x());
+  pose.mutable_translation()->set_y_mm(p.at.y());
+  pose.mutable_translation()->set_z_mm(p.at.z());
+  pose.mutable_rotation_axis()->set_z_mm(1.0);
+  pose.set_rotation_deg(p.turn_deg);
+  return pose;
+}
+
+pb::AuditReport run_audit(pb::Gatekeeper::Stub& stub, const pb::StartAuditRequest& start, bool html = false) {
+  pb::AuditJob job;
+  grpc::ClientContext sctx;
+  EXPECT_TRUE(stub.StartAudit(&sctx, start, &job).ok());
+  grpc::ClientContext wctx;
+  pb::WatchAuditRequest watch;
+  watch.set_job_id(job.job_id());
+  auto reader = stub.WatchAudit(&wctx, watch);
+  pb::AuditProgress progress;
+  while (reader->Read(&progress)) {
+  }
+  EXPECT_TRUE(reader->Finish().ok());
+  grpc::ClientContext rctx;
+  rctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+  pb::GetAuditReportRequest get;
+  get.set_job_id(job.job_id());
+  get.set_html(html);
+  pb::AuditReport report;
+  EXPECT_TRUE(stub.GetAuditReport(&rctx, get, &report).ok());
+  return report;
+}
+
+std::map<std::pair<std::string, std::string>, pb::Verdict> clash_set(const pb::AuditReport& report) {
+  std::map<std::pair<std::string, std::string>, pb::Verdict> out;
+  for (const pb::Clash& c : report.clashes()) out[{c.name_a(), c.name_b()}] = c.verdict();
+  return out;
+}
+
+std::string run(const std::string& command) {
+  std::string out;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return out;
+  char buffer[4096];
+  while (std::size_t n = fread(buffer, 1, sizeof buffer, pipe)) out.append(buffer, n);
+  pclose(pipe);
+  return out;
+}
+
+TEST(AuditE2E, AFactoryAuditWithRulesEqualsEveryPairAndItsPageDrawsInChromium) {
+  Daemon daemon(testing::temp_dir("audit-factory"));
+  auto stub = daemon.stub();
+  // Parts: a column, a crate, two KUKA collision links (metres: scaled by the pose? no: kept small).
+  const std::string column = upload(*stub, box_obj(400, 400, 8000), "obj");
+  const std::string crate = upload(*stub, box_obj(1000, 1000, 1000), "obj");
+  const std::string pipe = upload(*stub, box_obj(30000, 200, 200), "obj");
+  const std::string link0 = upload(*stub, testing::read_file(testing::shared_data("meshes/robots/kuka_kr10r1420/collision/base_link.stl")), "stl");
+  const std::string link1 = upload(*stub, testing::read_file(testing::shared_data("meshes/robots/kuka_kr10r1420/collision/link_1.stl")), "stl");
+  std::vector<Placed> placed;
+  for (int i = 0; i < 4; ++i) placed.push_back({"column" + std::to_string(i), "column", "", column, Vec3(i * 8000.0, 0, 0)});
+  placed.push_back({"pipe", "pipe", "", pipe, Vec3(-1000, 100, 3000)});       // crosses every column: 4 clashes
+  placed.push_back({"crate-a", "crate", "", crate, Vec3(2000, 3000, 0)});
+  placed.push_back({"crate-b", "crate", "", crate, Vec3(2995, 3000, 0)});     // overlaps crate-a by 5 mm
+  placed.push_back({"crate-c", "crate", "", crate, Vec3(4002, 3000, 0)});     // 7 mm from crate-b: a clearance violation
+  placed.push_back({"crate-d", "crate", "", crate, Vec3(9000, 3000, 0)});     // alone
+  for (int r = 0; r < 3; ++r) {                                                // robots: links of one robot overlap
+    const std::string group = "robot" + std::to_string(r);
+    placed.push_back({group + "/base", "robot", group, link0, Vec3(14000.0 + 3000 * r, 5000, 0), 30.0 * r});
+    placed.push_back({group + "/link1", "robot", group, link1, Vec3(14000.0 + 3000 * r, 5000, 0), 30.0 * r});
+  }
+  grpc::ClientContext cctx;
+  pb::CreateSceneRequest create;
+  create.set_name("hall <7>");
+  pb::SceneInfo scene;
+  ASSERT_TRUE(stub->CreateScene(&cctx, create, &scene).ok());
+  std::map<std::string, std::string> id_of;
+  for (const Placed& p : placed) {
+    grpc::ClientContext ctx;
+    pb::PutObjectRequest put;
+    put.set_scene_id(scene.scene_id());
+    put.mutable_object()->set_name(p.name);
+    put.mutable_object()->set_category(p.category);
+    put.mutable_object()->set_group(p.group);
+    put.mutable_object()->set_part_id(p.part);
+    *put.mutable_object()->mutable_pose() = pose_of(p);
+    pb::MoveResult moved;
+    ASSERT_TRUE(stub->PutObject(&ctx, put, &moved).ok());
+    id_of[p.name] = moved.object_id();
+  }
+  pb::StartAuditRequest start;
+  start.set_scene_id(scene.scene_id());
+  start.set_clearance_mm(10.0);
+  start.set_tile_mm(6000.0);
+  pb::ContactRule* rule = start.add_rules();
+  rule->set_name("links of one robot");
+  rule->set_category_a("robot");
+  rule->set_category_b("robot");
+  rule->set_same_group_only(true);
+  const pb::AuditReport report = run_audit(*stub, start, true);
+  EXPECT_EQ(report.progress().state(), pb::DONE);
+  EXPECT_GT(report.progress().tiles_total(), 4u);
+  EXPECT_EQ(report.excluded_by_rules(), 3u);
+  // The oracle: every pair in process (names in id order, as the service orders them).
+  std::map<std::string, std::shared_ptr<MeshBvh>> meshes;
+  auto mesh_of = [&](const Placed& p) {
+    if (!meshes.count(p.part)) {
+      const std::string file = p.part == link0   ? testing::shared_data("meshes/robots/kuka_kr10r1420/collision/base_link.stl")
+                               : p.part == link1 ? testing::shared_data("meshes/robots/kuka_kr10r1420/collision/link_1.stl")
+                                                 : "";
+      TriangleMesh m = file.empty() ? testing::box_mesh(Vec3::Zero(), p.part == column ? Vec3(400, 400, 8000)
+                                                                       : p.part == crate ? Vec3(1000, 1000, 1000)
+                                                                                          : Vec3(30000, 200, 200))
+                                    : mesh_io::read_mesh_file(file).value();
+      meshes[p.part] = MeshBvh::build(testing::share(std::move(m))).value();
+    }
+    return meshes[p.part];
+  };
+  std::map<std::pair<std::string, std::string>, pb::Verdict> expected;
+  for (std::size_t i = 0; i < placed.size(); ++i)
+    for (std::size_t j = i + 1; j < placed.size(); ++j) {
+      const Placed& a = placed[i];
+      const Placed& b = placed[j];
+      if (a.category == "robot" && b.category == "robot" && a.group == b.group) continue;
+      const auto v = assess(*mesh_of(a), RigidTransform::from_axis_angle(Vec3::UnitZ(), a.turn_deg * 3.14159265358979323846 / 180, a.at),
+                            *mesh_of(b), RigidTransform::from_axis_angle(Vec3::UnitZ(), b.turn_deg * 3.14159265358979323846 / 180, b.at))
+                         .value();
+      if (v.verdict == Verdict::kClear && v.distance_mm >= 10.0) continue;
+      const bool a_first = id_of[a.name] < id_of[b.name];
+      expected[{a_first ? a.name : b.name, a_first ? b.name : a.name}] =
+          v.verdict == Verdict::kCollision ? pb::COLLISION : v.verdict == Verdict::kTouching ? pb::TOUCHING
+                                                           : v.verdict == Verdict::kClear     ? pb::CLEAR
+                                                                                              : pb::INCONCLUSIVE;
+    }
+  EXPECT_EQ(clash_set(report), expected);
+  EXPECT_EQ(expected.size(), 6u);  // pipe x 4 columns, crates a-b, crates b-c (clearance)
+  bool crates_grouped = false;
+  for (const pb::ClashGroup& g : report.by_category()) crates_grouped = crates_grouped || (g.key() == "crate / crate" && g.clashes() == 2);
+  EXPECT_TRUE(crates_grouped);
+  ASSERT_GT(report.by_object_size(), 0);
+  EXPECT_EQ(report.by_object(0).clashes(), 4u);  // the pipe
+
+  // The page: self-contained, then loaded in headless Chromium, which must draw it and list every clash.
+  const std::string& html = report.html();
+  EXPECT_NE(html.find("hall &lt;7&gt;"), std::string::npos);
+  EXPECT_EQ(html.find("src=\"http"), std::string::npos);  // nothing fetched from the network
+  const std::string page = testing::temp_dir("audit-page") + "/report.html";
+  std::ofstream(page) << html;
+  const std::string dom = run("chromium --headless=new --no-sandbox --disable-dev-shm-usage --enable-unsafe-swiftshader "
+                              "--use-angle=swiftshader --virtual-time-budget=10000 --dump-dom file://" + page + " 2>/dev/null");
+  ASSERT_FALSE(dom.empty()) << "chromium did not run (scripts/install_deps.sh installs it)";
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(dom, m, std::regex("<body([^>]*)>"))) << dom.substr(0, 400);
+  const std::string body = m[1];
+  EXPECT_NE(body.find("data-state=\"drawn\""), std::string::npos) << body;
+  EXPECT_NE(body.find("data-rows=\"6\""), std::string::npos) << body;
+  EXPECT_NE(body.find("data-drawn-markers=\"6\""), std::string::npos) << body;
+  EXPECT_NE(body.find("data-drawn-objects=\"" + std::to_string(placed.size()) + "\""), std::string::npos) << body;
+  EXPECT_NE(body.find("data-renderer=\"webgl\""), std::string::npos) << body;  // the 3D view, not the 2D fallback
+  std::printf("chromium: %s\n", body.c_str());
+  EXPECT_NE(dom.find("crate-b"), std::string::npos);
+
+  // Move crate-b away: a re-audit against the first job equals a fresh audit and computes fewer pairs.
+  grpc::ClientContext mctx;
+  pb::MoveObjectRequest move;
+  move.set_scene_id(scene.scene_id());
+  move.set_object_id(id_of["crate-b"]);
+  Placed moved_b = placed[6];
+  moved_b.at = Vec3(2995, 9000, 0);
+  *move.mutable_pose() = pose_of(moved_b);
+  pb::MoveResult moved;
+  ASSERT_TRUE(stub->MoveObject(&mctx, move, &moved).ok());
+  pb::StartAuditRequest again = start;
+  again.set_baseline_job_id(report.progress().job_id());
+  const pb::AuditReport incremental = run_audit(*stub, again);
+  const pb::AuditReport fresh = run_audit(*stub, start);
+  EXPECT_EQ(clash_set(incremental), clash_set(fresh));
+  EXPECT_EQ(clash_set(fresh).size(), 4u);
+  EXPECT_LT(incremental.recomputed_pairs(), fresh.recomputed_pairs());
+
+  // Bad input names the field.
+  pb::StartAuditRequest bad = start;
+  bad.mutable_rules(0)->set_category_a("");
+  grpc::ClientContext b1;
+  pb::AuditJob job;
+  grpc::Status s = stub->StartAudit(&b1, bad, &job);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(s.error_message().find("rules[0].category_a"), std::string::npos);
+  bad = start;
+  bad.set_baseline_job_id("audit-404");
+  grpc::ClientContext b2;
+  s = stub->StartAudit(&b2, bad, &job);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::NOT_FOUND);
+  EXPECT_NE(s.error_message().find("baseline_job_id"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace gk
