@@ -21,6 +21,10 @@ PACKAGES=(
   libtomlplusplus-dev
   # python clients
   python3 python3-grpcio python3-protobuf
+  # the audit report page: three.js from npm, checked in headless Chromium
+  # (npm too: Debian packages it apart from nodejs; NodeSource's nodejs includes it and conflicts
+  # with Debian's npm, so it is installed below only when the command is missing)
+  nodejs chromium
 )
 
 missing=()
@@ -29,12 +33,24 @@ for p in "${PACKAGES[@]}"; do
 done
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install_deps: all ${#PACKAGES[@]} packages present"
-  exit 0
+else
+  SUDO=""
+  [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  echo "install_deps: installing ${#missing[@]} packages: ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
-SUDO=""
-[ "$(id -u)" -eq 0 ] || SUDO="sudo"
-echo "install_deps: installing ${#missing[@]} packages: ${missing[*]}"
-export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+# three.js for the audit report page, pinned by server/report_page/package-lock.json; the build
+# embeds it, so nothing is fetched at build or run time.
+if ! command -v npm > /dev/null; then
+  echo "install_deps: installing npm"
+  export DEBIAN_FRONTEND=noninteractive
+  $([ "$(id -u)" -eq 0 ] || echo sudo) apt-get install -y -qq --no-install-recommends npm
+fi
+REPORT_PAGE="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/server/report_page"
+if [ ! -f "$REPORT_PAGE/node_modules/three/build/three.min.js" ]; then
+  echo "install_deps: npm ci in $REPORT_PAGE"
+  npm ci --prefix "$REPORT_PAGE" --no-audit --no-fund --loglevel=error
+fi
