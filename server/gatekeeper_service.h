@@ -81,8 +81,9 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
   grpc::Status clearance(const pb::ClearanceQueryRequest& request, pb::ClearanceQueryResponse* response);
   grpc::Status machine_info(const std::string& id, pb::MachineInfo* response);
  public:
-  // A move of one object (unary, or one message of a drag): stored, then its contacts.
-  grpc::Status move(const pb::MoveObjectRequest& request, pb::MoveResult* response);
+  // A move of one object (unary, or one message of a drag): stored, then its contacts; a drag
+  // answers through its stream's layout session.
+  grpc::Status move(const pb::MoveObjectRequest& request, pb::MoveResult* response, DragSession* drag = nullptr);
   SceneStore& scenes() { return scenes_; }
   AuditJobs& audits() { return audits_; }
 

@@ -36,6 +36,48 @@ int severity(Verdict v) {
 
 }  // namespace
 
+Result<PlacedScene> place_scene(const SceneRecord& scene, PartRegistry& parts) {
+  PlacedScene out;
+  for (const auto& [id, o] : scene.objects) {
+    auto p = place(o, parts);
+    if (!p.ok()) return p.error();
+    out.index_of[id] = static_cast<std::uint32_t>(out.objects.size());
+    out.objects.push_back({o.name, o.category, o.group, p.value().part->bvh, p.value().pose});
+    out.records.push_back(&o);
+    out.boxes.push_back(p.value().box);
+  }
+  return out;
+}
+
+Result<MoveOutcome> DragSession::move(const SceneRecord& scene, const std::string& object_id, double clearance_mm,
+                                      const RigidTransform& pose, PartRegistry& parts) {
+  // Still valid when only this stream's own moves happened since (one version each).
+  const bool same = session_ && scene.id == scene_id_ && object_id == object_id_ && clearance_mm == clearance_mm_ &&
+                    scene.version == version_ + 1;
+  if (!same) {
+    auto placed = place_scene(scene, parts);
+    if (!placed.ok()) return placed.error();
+    auto it = placed.value().index_of.find(object_id);
+    if (it == placed.value().index_of.end()) return Error{ErrorCode::kNotFound, "object_id", "no object '" + object_id + "'"};
+    auto session = LayoutSession::create(std::move(placed.value().objects), it->second, clearance_mm);
+    if (!session.ok()) return session.error();
+    session_ = std::move(session).value();
+    ids_.clear();
+    for (const SceneObjectRecord* r : placed.value().records) ids_.push_back(r->id);
+    scene_id_ = scene.id;
+    object_id_ = object_id;
+    clearance_mm_ = clearance_mm;
+  }
+  version_ = scene.version;
+  auto frame = session_->move_to(pose);
+  if (!frame.ok()) return frame.error();
+  MoveOutcome out;
+  out.verdict = frame.value().worst;
+  out.candidates = frame.value().candidates;
+  for (const FrameContact& c : frame.value().contacts) out.contacts.push_back({ids_[c.other], c.verdict, c.distance_mm, c.point, c.other_point});
+  return out;
+}
+
 Result<MoveOutcome> object_contacts(const SceneRecord& scene, const std::string& object_id, double clearance_mm,
                                     PartRegistry& parts) {
   if (!std::isfinite(clearance_mm) || clearance_mm < 0.0) return invalid_argument("clearance_mm", "must be >= 0");
@@ -84,18 +126,14 @@ std::vector<AuditedObject> AuditJob::objects() const {
 
 void AuditJob::run(PartRegistry& parts) {
   // The scene's objects in id order; one mesh and BVH per part, shared by every copy.
-  std::vector<AuditObject> objects;
-  std::vector<const SceneObjectRecord*> records;
+  auto placed = place_scene(scene_, parts);
+  if (!placed.ok()) return fail(placed.error());
+  std::vector<AuditObject>& objects = placed.value().objects;
+  const std::vector<const SceneObjectRecord*>& records = placed.value().records;
+  const std::map<std::string, std::uint32_t>& index_of = placed.value().index_of;
   std::vector<AuditedObject> audited;
-  std::map<std::string, std::uint32_t> index_of;
-  for (const auto& [id, o] : scene_.objects) {
-    auto p = place(o, parts);
-    if (!p.ok()) return fail(p.error());
-    index_of[id] = static_cast<std::uint32_t>(objects.size());
-    objects.push_back({o.name, o.category, o.group, p.value().part->bvh, p.value().pose});
-    records.push_back(&o);
-    audited.push_back({o.id, o.name, o.category, p.value().box});
-  }
+  for (std::size_t i = 0; i < records.size(); ++i)
+    audited.push_back({records[i]->id, records[i]->name, records[i]->category, placed.value().boxes[i]});
   {
     std::lock_guard<std::mutex> lock(mutex_);
     objects_ = audited;
@@ -137,7 +175,7 @@ void AuditJob::run(PartRegistry& parts) {
       const bool same = it != before.objects.end() && it->second.part_id == o.part_id && it->second.category == o.category &&
                         it->second.group == o.group && it->second.pose.translation == o.pose.translation &&
                         it->second.pose.axis == o.pose.axis && it->second.pose.angle_deg == o.pose.angle_deg;
-      if (!same) changed.push_back(index_of[id]);
+      if (!same) changed.push_back(index_of.at(id));
     }
     AuditResult previous;
     for (const ClashRecord& r : base.clashes) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "kernel/contact_verdict.h"
+#include "kernel/layout_session.h"
 #include "kernel/scene_audit.h"
 #include "server/part_registry.h"
 #include "server/scene_store.h"
@@ -30,6 +31,33 @@ struct MoveOutcome {
   Verdict verdict = Verdict::kClear;  // the worst over the neighbours
   std::vector<ObjectContactResult> contacts;
   unsigned candidates = 0;
+};
+
+// A scene's objects ready for the kernel, in id order: one mesh and BVH per part, shared by every
+// copy (instancing), each at its pose.
+struct PlacedScene {
+  std::vector<AuditObject> objects;
+  std::vector<const SceneObjectRecord*> records;  // into the SceneRecord it was placed from
+  std::vector<Aabb> boxes;
+  std::map<std::string, std::uint32_t> index_of;
+};
+Result<PlacedScene> place_scene(const SceneRecord& scene, PartRegistry& parts);
+
+// A drag stream's layout session (kernel/layout_session): built on the first move of an object,
+// kept while the stream drags the same object with the same clearance and nobody else edits the
+// scene, rebuilt otherwise.
+class DragSession {
+ public:
+  // The scene as stored after this move (the moved object already at `pose`).
+  Result<MoveOutcome> move(const SceneRecord& scene, const std::string& object_id, double clearance_mm,
+                           const RigidTransform& pose, PartRegistry& parts);
+
+ private:
+  std::unique_ptr<LayoutSession> session_;
+  std::vector<std::string> ids_;  // object index -> id
+  std::string scene_id_, object_id_;
+  double clearance_mm_ = -1.0;
+  std::uint64_t version_ = 0;     // the scene version the session reflects
 };
 
 // The object against every other object of the scene: those whose boxes (grown by clearance_mm)

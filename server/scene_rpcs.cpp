@@ -71,7 +71,7 @@ class DragReactor final : public grpc::ServerBidiReactor<pb::MoveObjectRequest, 
     if (!ok) return Finish(grpc::Status::OK);  // the client is done dragging
     const auto t0 = Clock::now();
     reply_.Clear();
-    const grpc::Status s = service_.move(request_, &reply_);
+    const grpc::Status s = service_.move(request_, &reply_, &session_);
     service_.stats().record("DragObject.move", us_since(t0), !s.ok());
     if (!s.ok()) return Finish(s);
     StartWrite(&reply_);
@@ -86,6 +86,7 @@ class DragReactor final : public grpc::ServerBidiReactor<pb::MoveObjectRequest, 
   GatekeeperService& service_;
   pb::MoveObjectRequest request_;
   pb::MoveResult reply_;
+  DragSession session_;
 };
 
 // Streams an audit's progress until it ends; the job itself runs whether or not anyone watches.
@@ -143,7 +144,7 @@ grpc::ServerUnaryReactor* GatekeeperService::CreateScene(grpc::CallbackServerCon
   return finish(ctx, stats_, "CreateScene", t0, grpc::Status::OK);
 }
 
-grpc::Status GatekeeperService::move(const pb::MoveObjectRequest& request, pb::MoveResult* response) {
+grpc::Status GatekeeperService::move(const pb::MoveObjectRequest& request, pb::MoveResult* response, DragSession* drag) {
   const auto t0 = Clock::now();
   auto pose = to_stored_pose(request.pose(), "pose");
   if (!pose.ok()) return to_status(pose.error());
@@ -151,7 +152,10 @@ grpc::Status GatekeeperService::move(const pb::MoveObjectRequest& request, pb::M
   if (!moved.ok()) return to_status(moved.error());
   auto scene = scenes_.get(request.scene_id());
   if (!scene.ok()) return to_status(scene.error());
-  auto outcome = object_contacts(scene.value(), request.object_id(), request.clearance_mm(), parts_);
+  if (!std::isfinite(request.clearance_mm()) || request.clearance_mm() < 0.0)
+    return {grpc::StatusCode::INVALID_ARGUMENT, "clearance_mm: must be a finite distance >= 0"};
+  auto outcome = drag ? drag->move(scene.value(), request.object_id(), request.clearance_mm(), pose.value().transform(), parts_)
+                      : object_contacts(scene.value(), request.object_id(), request.clearance_mm(), parts_);
   if (!outcome.ok()) return to_status(outcome.error());
   response->set_object_id(request.object_id());
   response->set_verdict(to_proto(outcome.value().verdict));

@@ -130,6 +130,7 @@ Result<SceneObjectRecord> SceneStore::put(const std::string& scene_id, SceneObje
   auto written = write_object(scene_id, object);
   if (!written.ok()) return written.error();
   it->second.objects[object.id] = object;
+  ++it->second.version;
   return object;
 }
 
@@ -144,6 +145,7 @@ Result<SceneObjectRecord> SceneStore::move(const std::string& scene_id, const st
   auto written = write_object(scene_id, moved);
   if (!written.ok()) return written.error();
   ob->second = moved;
+  ++it->second.version;
   return moved;
 }
 
@@ -160,6 +162,7 @@ Result<SceneRecord> SceneStore::remove(const std::string& scene_id, const std::s
   sqlite3_finalize(stmt);
   if (rc != SQLITE_DONE) return storage_error("cannot delete the object");
   it->second.objects.erase(object_id);
+  ++it->second.version;
   return it->second;
 }
 

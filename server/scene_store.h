@@ -5,6 +5,7 @@
 #include "kernel/rigid_transform.h"
 #include "kernel/status.h"
 
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -31,6 +32,7 @@ struct SceneObjectRecord {
 struct SceneRecord {
   std::string id, name;
   std::map<std::string, SceneObjectRecord> objects;
+  std::uint64_t version = 0;  // in memory: counts the changes since the daemon started
 };
 
 class SceneStore {

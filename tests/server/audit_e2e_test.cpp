@@ -11,10 +11,13 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <algorithm>
 #include <fstream>
 #include <map>
 #include <regex>
 #include <set>
+#include <tuple>
+#include <cmath>
 
 namespace gk {
 namespace {
@@ -233,6 +236,92 @@ TEST(AuditE2E, AFactoryAuditWithRulesEqualsEveryPairAndItsPageDrawsInChromium) {
   s = stub->StartAudit(&b2, bad, &job);
   EXPECT_EQ(s.error_code(), grpc::StatusCode::NOT_FOUND);
   EXPECT_NE(s.error_message().find("baseline_job_id"), std::string::npos);
+}
+
+TEST(AuditE2E, ADragStreamAnswersLikeSingleMovesEvenWhenOthersEditTheScene) {
+  Daemon daemon(testing::temp_dir("drag-session"));
+  auto stub = daemon.stub();
+  const std::string column = upload(*stub, box_obj(400, 400, 8000), "obj");
+  const std::string link0 = upload(*stub, testing::read_file(testing::shared_data("meshes/robots/kuka_kr10r1420/collision/base_link.stl")), "stl");
+  // Two identical scenes: one dragged through a stream (its layout session stays valid between
+  // frames), the other moved by unary calls (the plain all-objects check) as the oracle.
+  struct Built {
+    std::string scene, robot;
+    std::vector<std::string> columns;
+  };
+  auto build = [&]() {
+    Built out;
+    grpc::ClientContext cctx;
+    pb::SceneInfo info;
+    EXPECT_TRUE(stub->CreateScene(&cctx, pb::CreateSceneRequest(), &info).ok());
+    out.scene = info.scene_id();
+    for (int i = 0; i < 12; ++i) {
+      grpc::ClientContext ctx;
+      pb::PutObjectRequest put;
+      put.set_scene_id(out.scene);
+      put.mutable_object()->set_name("column" + std::to_string(i));
+      put.mutable_object()->set_category("column");
+      put.mutable_object()->set_part_id(column);
+      *put.mutable_object()->mutable_pose() = pose_of({"", "", "", "", Vec3(1000.0 * i, (i % 2) * 700.0, 0)});
+      pb::MoveResult r;
+      EXPECT_TRUE(stub->PutObject(&ctx, put, &r).ok());
+      out.columns.push_back(r.object_id());
+    }
+    grpc::ClientContext pctx;
+    pb::PutObjectRequest put;
+    put.set_scene_id(out.scene);
+    put.mutable_object()->set_name("robot");
+    put.mutable_object()->set_category("robot");
+    put.mutable_object()->set_part_id(link0);
+    pb::MoveResult r;
+    EXPECT_TRUE(stub->PutObject(&pctx, put, &r).ok());
+    out.robot = r.object_id();
+    return out;
+  };
+  const Built dragged_scene = build(), unary_scene = build();
+  // Object ids differ between the scenes: compare contacts by the columns' index.
+  auto by_index = [](const pb::MoveResult& r, const Built& b) {
+    std::set<std::tuple<std::size_t, int, long long>> out;
+    for (const pb::ObjectContact& c : r.contacts()) {
+      const auto at = std::find(b.columns.begin(), b.columns.end(), c.other_object_id()) - b.columns.begin();
+      out.insert({static_cast<std::size_t>(at), static_cast<int>(c.verdict()), std::llround(c.distance_mm() * 1e6)});
+    }
+    return out;
+  };
+  grpc::ClientContext dctx;
+  auto stream = stub->DragObject(&dctx);
+  auto other_client = daemon.stub();
+  int frames_with_contacts = 0;
+  for (int f = 0; f < 60; ++f) {
+    pb::MoveObjectRequest move;
+    move.set_clearance_mm(100.0);
+    *move.mutable_pose() = pose_of({"", "", "", "", Vec3(-500.0 + 200.0 * f, 350.0, 0), 3.0 * f});
+    move.set_scene_id(dragged_scene.scene);
+    move.set_object_id(dragged_scene.robot);
+    ASSERT_TRUE(stream->Write(move));
+    pb::MoveResult dragged, single;
+    ASSERT_TRUE(stream->Read(&dragged));
+    move.set_scene_id(unary_scene.scene);
+    move.set_object_id(unary_scene.robot);
+    grpc::ClientContext uctx;
+    ASSERT_TRUE(other_client->MoveObject(&uctx, move, &single).ok());
+    EXPECT_EQ(by_index(dragged, dragged_scene), by_index(single, unary_scene)) << "frame " << f;
+    EXPECT_EQ(dragged.verdict(), single.verdict()) << "frame " << f;
+    frames_with_contacts += dragged.contacts_size() > 0;
+    if (f == 30) {  // another client moves a column into the robot's path, in both scenes
+      for (const Built* b : {&dragged_scene, &unary_scene}) {
+        grpc::ClientContext ectx;
+        pb::MoveObjectRequest edit;
+        edit.set_scene_id(b->scene);
+        edit.set_object_id(b->columns[8]);
+        *edit.mutable_pose() = pose_of({"", "", "", "", Vec3(7000.0, 0, 0)});
+        ASSERT_TRUE(other_client->MoveObject(&ectx, edit, &single).ok());
+      }
+    }
+  }
+  stream->WritesDone();
+  EXPECT_TRUE(stream->Finish().ok());
+  EXPECT_GT(frames_with_contacts, 10);
 }
 
 }  // namespace
