@@ -5,7 +5,10 @@
 #include <BVH_Set.hxx>
 #include <BVH_Tree.hxx>
 
+#include <cmath>
+#include <cstring>
 #include <numeric>
+#include <string>
 
 namespace gk {
 namespace {
@@ -76,7 +79,115 @@ Result<std::shared_ptr<MeshBvh>> MeshBvh::build(std::shared_ptr<const TriangleMe
     const BVH_BinnedBuilder<double, 3, 32> builder(options.leaf_size, BVH_Constants_MaxTreeDepth);
     builder.Build(bvh->impl_->set.get(), &bvh->impl_->tree, root);
   }
+  bvh->depth_ = bvh->impl_->tree.Depth();
   bvh->reload_corners();
+  bvh->reload_node_boxes();
+  return bvh;
+}
+
+namespace {
+
+constexpr char kSerialMagic[8] = {'G', 'K', 'B', 'V', 'H', '0', '0', '1'};
+
+template <typename T>
+void put(std::string& out, const T& value) {
+  out.append(reinterpret_cast<const char*>(&value), sizeof(T));
+}
+
+template <typename T>
+bool take(const std::string& in, std::size_t& at, T& value) {
+  if (in.size() - at < sizeof(T)) return false;
+  std::memcpy(&value, in.data() + at, sizeof(T));
+  at += sizeof(T);
+  return true;
+}
+
+}  // namespace
+
+std::string MeshBvh::serialize() const {
+  const auto& t = impl_->tree;
+  std::string out(kSerialMagic, sizeof kSerialMagic);
+  put(out, static_cast<std::uint64_t>(mesh_->triangle_count()));
+  put(out, static_cast<std::int32_t>(t.Length()));
+  put(out, static_cast<std::int32_t>(depth_));
+  for (int i = 0; i < t.Length(); ++i) {
+    const auto& lo = t.MinPoint(i);
+    const auto& hi = t.MaxPoint(i);
+    const auto& info = t.NodeInfoBuffer()[i];
+    for (double v : {lo.x(), lo.y(), lo.z(), hi.x(), hi.y(), hi.z()}) put(out, v);
+    for (int v : {info.x(), info.y(), info.z(), info.w()}) put(out, static_cast<std::int32_t>(v));
+  }
+  for (std::uint32_t k : ordered_to_mesh_) put(out, k);
+  return out;
+}
+
+Result<std::shared_ptr<MeshBvh>> MeshBvh::deserialize(std::shared_ptr<const TriangleMesh> mesh, const std::string& bytes) {
+  if (!mesh) return invalid_argument("mesh", "no mesh given");
+  auto bad = [](const std::string& why) { return invalid_argument("bytes", why); };
+  if (bytes.size() < sizeof kSerialMagic || std::memcmp(bytes.data(), kSerialMagic, sizeof kSerialMagic) != 0)
+    return bad("not a serialized BVH of this version");
+  std::size_t at = sizeof kSerialMagic;
+  std::uint64_t triangles = 0;
+  std::int32_t nodes = 0, depth = 0;
+  if (!take(bytes, at, triangles) || !take(bytes, at, nodes) || !take(bytes, at, depth)) return bad("truncated header");
+  const std::size_t n_tri = mesh->triangle_count();
+  if (triangles != n_tri) return bad("made for a mesh of another size");
+  if (nodes < 1 || static_cast<std::size_t>(nodes) > 2 * n_tri + 1 || depth < 0 || depth > 1024) return bad("impossible node count or depth");
+  const std::size_t need = static_cast<std::size_t>(nodes) * (6 * sizeof(double) + 4 * sizeof(std::int32_t)) + n_tri * sizeof(std::uint32_t);
+  if (bytes.size() - at != need) return bad("wrong length");
+  std::shared_ptr<MeshBvh> bvh(new MeshBvh());
+  bvh->mesh_ = std::move(mesh);
+  bvh->impl_ = std::make_unique<Impl>();
+  auto& t = bvh->impl_->tree;
+  t.Reserve(nodes);
+  for (int i = 0; i < nodes; ++i) {
+    double v[6] = {};
+    std::int32_t info[4] = {};
+    for (double& x : v) take(bytes, at, x);
+    for (std::int32_t& x : info) take(bytes, at, x);
+    for (double x : v)
+      if (!std::isfinite(x)) return bad("non-finite box");
+    const bool leaf = info[0] != 0;
+    if (leaf ? (info[1] < 0 || info[2] < info[1] || static_cast<std::size_t>(info[2]) >= n_tri)
+             : (info[1] <= i || info[2] <= i || info[1] >= nodes || info[2] >= nodes))
+      return bad("node " + std::to_string(i) + " points outside the tree");
+    const BVH_Vec3d lo(v[0], v[1], v[2]), hi(v[3], v[4], v[5]);
+    if (leaf) t.AddLeafNode(lo, hi, info[1], info[2]);
+    else t.AddInnerNode(lo, hi, info[1], info[2]);
+    t.NodeInfoBuffer().back().w() = info[3];
+  }
+  bvh->ordered_to_mesh_.resize(n_tri);
+  std::vector<char> seen(n_tri, 0);
+  for (std::uint32_t& k : bvh->ordered_to_mesh_) {
+    take(bytes, at, k);
+    if (k >= n_tri || seen[k]) return bad("the triangle order is not a permutation");
+    seen[k] = 1;
+  }
+  bvh->impl_->set = std::make_unique<TriangleSet>(*bvh->mesh_, bvh->ordered_to_mesh_);
+  bvh->depth_ = depth;
+  bvh->reload_corners();
+  // Every box must hold what it claims (the builder's boxes are exact minima and maxima), so a
+  // damaged coordinate can never hide a triangle from a query.
+  auto inside = [&](int node, const Vec3& p) {
+    const auto& lo = t.MinPoint(node);
+    const auto& hi = t.MaxPoint(node);
+    return p.x() >= lo.x() && p.y() >= lo.y() && p.z() >= lo.z() && p.x() <= hi.x() && p.y() <= hi.y() && p.z() <= hi.z();
+  };
+  for (int i = 0; i < nodes; ++i) {
+    const auto& info = t.NodeInfoBuffer()[i];
+    if (info.x() != 0) {
+      for (int k = info.y(); k <= info.z(); ++k)
+        for (const Vec3& p : bvh->ordered_corners_[k])
+          if (!inside(i, p)) return bad("node " + std::to_string(i) + " does not bound its triangles");
+    } else {
+      for (int child : {info.y(), info.z()}) {
+        const auto& lo = t.MinPoint(child);
+        const auto& hi = t.MaxPoint(child);
+        if (!inside(i, Vec3(lo.x(), lo.y(), lo.z())) || !inside(i, Vec3(hi.x(), hi.y(), hi.z())))
+          return bad("node " + std::to_string(i) + " does not bound its children");
+      }
+    }
+  }
   bvh->reload_node_boxes();
   return bvh;
 }
@@ -113,7 +224,7 @@ MeshBvh::NodeView MeshBvh::nodes() const {
 }
 
 int MeshBvh::node_count() const { return impl_->tree.Length(); }
-int MeshBvh::depth() const { return impl_->tree.Depth(); }
+int MeshBvh::depth() const { return depth_; }
 
 Aabb MeshBvh::root_bounds() const {
   const auto& t = impl_->tree;

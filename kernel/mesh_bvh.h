@@ -38,6 +38,11 @@ class MeshBvh {
   MeshBvh(const MeshBvh&) = delete;
   MeshBvh& operator=(const MeshBvh&) = delete;
 
+  // The tree as bytes (node arrays, depth, triangle order), and back onto the same mesh without
+  // the SAH build. Loading checks every index, so damaged bytes are an error, never a bad tree.
+  std::string serialize() const;
+  static Result<std::shared_ptr<MeshBvh>> deserialize(std::shared_ptr<const TriangleMesh> mesh, const std::string& bytes);
+
   // Recomputes every box bottom-up from the mesh's current vertices (same topology).
   void refit(std::shared_ptr<const TriangleMesh> moved_mesh);
 
@@ -69,6 +74,7 @@ class MeshBvh {
   std::vector<Vec3> node_center_;
   std::vector<Vec3> node_half_;
   std::vector<std::uint32_t> ordered_to_mesh_;
+  int depth_ = 0;
 };
 
 }  // namespace gk

@@ -78,7 +78,7 @@ int main(int argc, char** argv) {
     spdlog::error("{}", store.error().to_string());
     return 1;
   }
-  gk::server::PartRegistry parts(*store.value());
+  gk::server::PartRegistry parts(*store.value(), config.data_dir + "/bvh-cache");
   auto machines = gk::server::MachineRegistry::create(config.data_dir + "/machines");
   if (!machines.ok()) {
     spdlog::error("default machine model: {}", machines.error().to_string());

@@ -68,7 +68,7 @@ Result<std::shared_ptr<const LoadedPart>> PartRegistry::load(const std::string& 
   if (!mesh.ok()) return mesh.error();
   part->record = record.value();
   part->mesh = std::make_shared<const TriangleMesh>(std::move(mesh).value());
-  auto bvh = MeshBvh::build(part->mesh);
+  auto bvh = bvh_cache_.get_or_build(part->mesh);
   if (!bvh.ok()) return bvh.error();
   part->bvh = bvh.value();
   part->deflection_mm = key_deflection;

@@ -1,6 +1,7 @@
 // Uploaded parts as meshes, loaded from the store on first use and kept in memory.
 #pragma once
 
+#include "kernel/bvh_cache.h"
 #include "kernel/mesh_bvh.h"
 #include "occt_adapters/shape.h"
 #include "server/part_store.h"
@@ -23,7 +24,8 @@ struct LoadedPart {
 
 class PartRegistry {
  public:
-  explicit PartRegistry(PartStore& store) : store_(store) {}
+  // BVHs are kept on disk in bvh_cache_dir (by mesh content), so a restarted daemon loads them.
+  PartRegistry(PartStore& store, const std::string& bvh_cache_dir) : store_(store), bvh_cache_(bvh_cache_dir) {}
 
   // The part's mesh: mesh formats as stored, CAD formats tessellated at deflection_mm.
   Result<std::shared_ptr<const LoadedPart>> load(const std::string& id, double deflection_mm);
@@ -37,6 +39,7 @@ class PartRegistry {
 
  private:
   PartStore& store_;
+  BvhCache bvh_cache_;
   std::mutex mutex_;
   std::map<std::pair<std::string, double>, std::shared_ptr<const LoadedPart>> loaded_;
 };

@@ -3,6 +3,7 @@
 //   build/tests/benchmarks/audit_benchmark [objects] [triangles] [threads] [tile_mm] [distinct]
 //   e.g. audit_benchmark 10000 100000000 2 50000      (catalogue meshes shared, as in a real twin)
 //        audit_benchmark 2000 10000000 2 50000 1      (every machine its own mesh and BVH)
+//        audit_benchmark 2000 10000000 2 50000 1 DIR  (BVHs from the disk cache in DIR; run twice)
 #include "kernel/scene_audit.h"
 #include "tests/support/factory_scene.h"
 
@@ -30,6 +31,7 @@ int main(int argc, char** argv) {
   const int threads = argc > 3 ? std::atoi(argv[3]) : 2;
   const double tile = argc > 4 ? std::atof(argv[4]) : 50000.0;
   scene_options.distinct_meshes = argc > 5 && std::atoi(argv[5]) != 0;
+  if (argc > 6) scene_options.bvh_cache_dir = argv[6];
   const auto t0 = std::chrono::steady_clock::now();
   const gk::testing::FactoryScene scene = gk::testing::generate_factory_scene(scene_options);
   const double build_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

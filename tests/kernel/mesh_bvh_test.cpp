@@ -1,5 +1,6 @@
 // The OCCT-built tree covers every triangle once, its boxes bound their contents, and a refit after
 // the vertices move gives the same answers as a rebuild.
+#include "kernel/bvh_cache.h"
 #include "kernel/mesh_bvh.h"
 #include "kernel/mesh_collision.h"
 #include "kernel/mesh_distance.h"
@@ -8,7 +9,10 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
 #include <set>
+#include <unistd.h>
 
 namespace gk {
 namespace {
@@ -88,6 +92,78 @@ TEST(MeshBvh, RefitAfterDeformationAnswersLikeARebuild) {
     const auto d2 = distance(*obstacle, RigidTransform{}, *rebuilt, pose).value();
     EXPECT_EQ(d1.distance_mm, d2.distance_mm);  // the same minimum pair: bit-identical
   }
+}
+
+}  // namespace
+}  // namespace gk
+
+namespace gk {
+namespace {
+
+TEST(MeshBvhSerialization, ARoundTripAnswersLikeTheBuiltTreeAndDamageIsRefused) {
+  testing::Rng rng(21);
+  auto mesh = testing::share(testing::random_closed_blob(rng, 4, 40.0, 0.3, Vec3::Zero()));
+  const auto built = MeshBvh::build(mesh).value();
+  const std::string bytes = built->serialize();
+  const auto loaded = MeshBvh::deserialize(mesh, bytes).value();
+  EXPECT_EQ(loaded->node_count(), built->node_count());
+  EXPECT_EQ(loaded->depth(), built->depth());
+  const auto other = MeshBvh::build(testing::share(testing::random_closed_blob(rng, 3, 30.0, 0.3, Vec3::Zero()))).value();
+  for (int i = 0; i < 50; ++i) {
+    const RigidTransform pose = testing::random_pose(rng, 70.0);
+    EXPECT_EQ(distance(*built, {}, *other, pose).value().distance_mm, distance(*loaded, {}, *other, pose).value().distance_mm);
+    CollisionRequest all;
+    all.all_contacts = true;
+    EXPECT_EQ(collide(*built, {}, *other, pose, all).value().contacts.size(), collide(*loaded, {}, *other, pose, all).value().contacts.size());
+  }
+  // Truncated, foreign, or damaged bytes: an error, or (a damage that changes nothing a query
+  // relies on) a tree that still bounds every triangle; never a crash.
+  EXPECT_FALSE(MeshBvh::deserialize(mesh, bytes.substr(0, bytes.size() - 1)).ok());
+  EXPECT_FALSE(MeshBvh::deserialize(mesh, "not a tree").ok());
+  EXPECT_FALSE(MeshBvh::deserialize(other->mesh().triangle_count() == mesh->triangle_count() ? nullptr : testing::share(other->mesh()), bytes).ok());
+  int refused = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    std::string damaged = bytes;
+    const std::size_t at = 8 + std::uniform_int_distribution<std::size_t>(0, damaged.size() - 9)(rng);
+    damaged[at] = static_cast<char>(damaged[at] ^ (1 << (trial % 8)));
+    auto result = MeshBvh::deserialize(mesh, damaged);
+    if (!result.ok()) {
+      ++refused;
+      continue;
+    }
+    const RigidTransform pose = testing::random_pose(rng, 70.0);
+    EXPECT_EQ(distance(*result.value(), {}, *other, pose).value().distance_mm, distance(*built, {}, *other, pose).value().distance_mm);
+  }
+  EXPECT_GT(refused, 100);
+}
+
+TEST(BvhCache, ASecondMeetingLoadsTheTreeAndABadFileIsRebuilt) {
+  const std::string dir = ::testing::TempDir() + "/bvh-cache-" + std::to_string(::getpid());
+  std::filesystem::remove_all(dir);
+  testing::Rng rng(4);
+  auto mesh = testing::share(testing::random_closed_blob(rng, 4, 40.0, 0.3, Vec3::Zero()));
+  BvhCache cache(dir);
+  const auto first = cache.get_or_build(mesh).value();
+  const auto again = cache.get_or_build(mesh).value();
+  EXPECT_EQ(cache.stats().built, 1u);
+  EXPECT_EQ(cache.stats().loaded, 1u);
+  EXPECT_EQ(again->serialize(), first->serialize());
+  // The same content in another mesh object hits the same file; different content does not.
+  auto copy = testing::share(TriangleMesh(*mesh));
+  (void)cache.get_or_build(copy).value();
+  EXPECT_EQ(cache.stats().loaded, 2u);
+  auto other = testing::share(testing::random_closed_blob(rng, 4, 40.0, 0.3, Vec3::Zero()));
+  EXPECT_NE(mesh_content_hash(*other), mesh_content_hash(*mesh));
+  (void)cache.get_or_build(other).value();
+  EXPECT_EQ(cache.stats().built, 2u);
+  // Overwrite every file with garbage: refused, rebuilt, rewritten.
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) std::ofstream(entry.path()) << "garbage";
+  const auto rebuilt = cache.get_or_build(mesh).value();
+  EXPECT_EQ(cache.stats().rejected, 1u);
+  EXPECT_EQ(rebuilt->serialize(), first->serialize());
+  (void)cache.get_or_build(mesh).value();
+  EXPECT_EQ(cache.stats().loaded, 3u);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "tests/support/factory_scene.h"
 
+#include "kernel/bvh_cache.h"
 #include "mesh_io/mesh_file_reader.h"
 #include "tests/support/random_meshes.h"
 
@@ -15,7 +16,13 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kBayMm = 10000.0;
 
-std::shared_ptr<const MeshBvh> bvh_of(TriangleMesh mesh) { return MeshBvh::build(share(std::move(mesh))).value(); }
+// Where BVHs come from: built, or through the disk cache when the options name one.
+BvhCache* g_cache = nullptr;
+
+std::shared_ptr<const MeshBvh> bvh_of(TriangleMesh mesh) {
+  auto shared = share(std::move(mesh));
+  return g_cache ? g_cache->get_or_build(shared).value() : MeshBvh::build(shared).value();
+}
 
 // A closed prism over a regular n-gon about z, z in [0, length] (pipes along x are turned).
 TriangleMesh cylinder_mesh(double radius, double length, int sides) {
@@ -75,6 +82,9 @@ class Builder {
 }  // namespace
 
 FactoryScene generate_factory_scene(const FactorySceneOptions& options) {
+  std::unique_ptr<BvhCache> cache;
+  if (!options.bvh_cache_dir.empty()) cache = std::make_unique<BvhCache>(options.bvh_cache_dir);
+  g_cache = cache.get();
   FactoryScene scene;
   Builder b(scene);
   std::mt19937_64 rng(options.seed);
@@ -175,6 +185,7 @@ FactoryScene generate_factory_scene(const FactorySceneOptions& options) {
   std::map<const MeshBvh*, int> unique;
   for (const AuditObject& o : scene.objects) unique[o.mesh.get()] = 1;
   scene.unique_meshes = unique.size();
+  g_cache = nullptr;
   return scene;
 }
 

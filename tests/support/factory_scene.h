@@ -9,6 +9,7 @@
 #include "kernel/scene_audit.h"
 
 #include <cstddef>
+#include <string>
 #include <vector>
 
 namespace gk::testing {
@@ -24,6 +25,8 @@ struct FactorySceneOptions {
   // Every robot link and machine gets its own mesh and BVH (a copy) instead of sharing one: the
   // cost of a scene without instancing.
   bool distinct_meshes = false;
+  // When set, BVHs are loaded from (and saved to) this kernel/bvh_cache directory.
+  std::string bvh_cache_dir;
 };
 
 struct KnownPair {

@@ -1,0 +1,75 @@
+#include "kernel/bvh_cache.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+namespace gk {
+namespace {
+
+void fnv(std::uint64_t& h, const void* data, std::size_t n) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < n; ++i) {
+    h ^= p[i];
+    h *= 1099511628211ULL;
+  }
+}
+
+}  // namespace
+
+std::uint64_t mesh_content_hash(const TriangleMesh& mesh) {
+  std::uint64_t h = 14695981039346656037ULL;
+  const std::uint64_t counts[2] = {mesh.vertices().size(), mesh.faces().size()};
+  fnv(h, counts, sizeof counts);
+  fnv(h, mesh.vertices().data(), mesh.vertices().size() * sizeof(Vec3));
+  fnv(h, mesh.faces().data(), mesh.faces().size() * sizeof(TriangleMesh::Face));
+  return h;
+}
+
+BvhCache::BvhCache(std::string directory) : directory_(std::move(directory)) {
+  std::error_code ec;
+  std::filesystem::create_directories(directory_, ec);
+}
+
+Result<std::shared_ptr<MeshBvh>> BvhCache::get_or_build(std::shared_ptr<const TriangleMesh> mesh) {
+  if (!mesh) return invalid_argument("mesh", "no mesh given");
+  char name[32];
+  std::snprintf(name, sizeof name, "%016llx.bvh", static_cast<unsigned long long>(mesh_content_hash(*mesh)));
+  const std::string path = directory_ + "/" + name;
+  {
+    std::ifstream in(path, std::ios::binary);
+    if (in) {
+      std::ostringstream bytes;
+      bytes << in.rdbuf();
+      auto loaded = MeshBvh::deserialize(mesh, bytes.str());
+      if (loaded.ok()) {
+        ++loaded_;
+        return loaded;
+      }
+      ++rejected_;
+    }
+  }
+  auto built = MeshBvh::build(mesh);
+  if (!built.ok()) return built;
+  ++built_;
+  // Whole file, then rename: a reader never sees half of one.
+  std::ostringstream tmp_name;
+  tmp_name << path << ".tmp." << std::this_thread::get_id();
+  {
+    std::ofstream out(tmp_name.str(), std::ios::binary | std::ios::trunc);
+    const std::string bytes = built.value()->serialize();
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    if (!out) ++write_failures_;
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp_name.str(), path, ec);
+  if (ec) {
+    ++write_failures_;
+    std::filesystem::remove(tmp_name.str(), ec);
+  }
+  return built;
+}
+
+}  // namespace gk
