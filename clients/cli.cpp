@@ -13,7 +13,8 @@
 //   gatekeeper-cli put-object '{"sceneId": "...", "object": {"partId": "...", "pose": {...}}}'
 //   gatekeeper-cli move-object '{"sceneId": "...", "objectId": "...", "pose": {...}}'
 //   gatekeeper-cli drag < moves.jsonl                (one MoveObjectRequest JSON per line)
-//   gatekeeper-cli start-audit '{"sceneId": "...", "clearanceMm": 10}' | watch-audit JOB | cancel-audit JOB | audit-report JOB
+//   gatekeeper-cli start-audit '{"sceneId": "...", "clearanceMm": 10, "rules": [...]}' | watch-audit JOB | cancel-audit JOB
+//   gatekeeper-cli audit-report JOB [--html report.html]
 // Exit status: 0 on OK, 1 on an RPC error (printed as JSON with its code), 2 on bad usage.
 #include "gatekeeper/v1/gatekeeper.grpc.pb.h"
 
@@ -122,9 +123,13 @@ int main(int argc, char** argv) {
   cancel_audit->add_option("job", id)->required();
   auto* audit_report = app.add_subcommand("audit-report", "an audit's progress and clashes");
   audit_report->add_option("job", id)->required();
+  std::string html_file;
+  audit_report->add_option("--html", html_file, "also write the report page (3D view, sortable clash table) to this file");
   CLI11_PARSE(app, argc, argv);
 
-  auto channel = grpc::CreateChannel(address, grpc::InsecureChannelCredentials());
+  grpc::ChannelArguments channel_args;
+  channel_args.SetMaxReceiveMessageSize(512 << 20);  // a whole factory's audit report and page
+  auto channel = grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), channel_args);
   auto stub = pb::Gatekeeper::NewStub(channel);
   grpc::ClientContext ctx;
   ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::milliseconds(static_cast<long>(timeout_s * 1000)));
@@ -259,8 +264,14 @@ int main(int argc, char** argv) {
   if (*audit_report) {
     pb::GetAuditReportRequest request;
     request.set_job_id(id);
+    request.set_html(!html_file.empty());
     pb::AuditReport reply;
-    return print_reply(stub->GetAuditReport(&ctx, request, &reply), reply);
+    const grpc::Status status = stub->GetAuditReport(&ctx, request, &reply);
+    if (status.ok() && !html_file.empty()) {
+      std::ofstream(html_file, std::ios::binary) << reply.html();
+      reply.clear_html();
+    }
+    return print_reply(status, reply);
   }
   if (*upload) {
     std::ifstream in(file, std::ios::binary);

@@ -2,6 +2,7 @@
 
 #include "kernel/broad_phase.h"
 #include "kernel/contact_regions.h"
+#include "kernel/interference_volume.h"
 #include "kernel/penetration_depth.h"
 
 #include <algorithm>
@@ -21,6 +22,7 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 // Depth on request uses a coarser lattice than ClearanceQuery: an audit has many pairs.
 constexpr int kAuditDepthDirections = 42;
 constexpr double kAuditDepthResolutionMm = 1e-3;
+constexpr int kAuditVolumeRaysPerAxis = 128;
 constexpr std::size_t kMaxTiles = 1u << 20;
 
 bool matches(const std::string& pattern, const std::string& value) { return pattern == "*" || pattern == value; }
@@ -82,6 +84,11 @@ bool audit_pair(const AuditObject& oa, const AuditObject& ob, const AuditOptions
       out.depth_mm = depth.value().depth_mm;
       out.depth_direction = depth.value().direction;
     }
+  }
+  if (options.compute_volume && r.verdict == Verdict::kCollision && oa.mesh->mesh().is_closed_oriented() &&
+      ob.mesh->mesh().is_closed_oriented()) {
+    auto volume = interference_volume(*oa.mesh, oa.pose, *ob.mesh, ob.pose, kAuditVolumeRaysPerAxis);
+    if (volume.ok()) out.volume_mm3 = volume.value().volume_mm3;
   }
   return true;
 }

@@ -60,6 +60,7 @@ struct PairClash {
   bool contacts_truncated = false;
   double depth_mm = -1.0;      // on request, for collisions: certified upper bound (kernel/penetration_depth)
   Vec3 depth_direction = Vec3::Zero();
+  double volume_mm3 = -1.0;    // on request, for collisions of closed meshes: ray-cast shared volume
   std::string error;           // the pair could not be decided (then verdict INCONCLUSIVE)
 };
 
@@ -75,6 +76,7 @@ struct AuditOptions {
   double tile_mm = 0.0;        // 0: one tile
   int threads = 1;
   bool compute_depth = false;
+  bool compute_volume = false;
   double region_merge_mm = 100.0;
   std::size_t max_contacts_per_pair = 2000;
   std::vector<ContactRule> rules;

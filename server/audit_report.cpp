@@ -39,6 +39,7 @@ Result<AuditRequest> to_audit_request(const pb::StartAuditRequest& in, int defau
   out.tile_mm = in.tile_mm() > 0.0 ? in.tile_mm() : kDefaultTileMm;
   out.threads = in.threads() > 0 ? static_cast<int>(in.threads()) : std::max(1, default_threads);
   out.compute_depth = in.compute_depth();
+  out.compute_volume = in.compute_volume();
   for (int i = 0; i < in.rules_size(); ++i) {
     const pb::ContactRule& r = in.rules(i);
     const std::string field = "rules[" + std::to_string(i) + "]";
@@ -67,6 +68,7 @@ void report_to_proto(const AuditSnapshot& snapshot, pb::AuditReport* out) {
     p->set_contact_pairs(c.contacts);
     p->set_clearance_violation(c.clearance_violation);
     p->set_depth_mm(c.depth_mm);
+    p->set_volume_mm3(c.volume_mm3);
     to_proto(c.depth_direction, p->mutable_depth_direction());
     for (const ClashRegion& region : c.regions) {
       pb::ClashRegion* q = p->add_regions();

@@ -149,6 +149,7 @@ void AuditJob::run(PartRegistry& parts) {
   options.tile_mm = request_.tile_mm;
   options.threads = request_.threads;
   options.compute_depth = request_.compute_depth;
+  options.compute_volume = request_.compute_volume;
   options.cancel = &cancelled_;
   options.on_progress = [this](const AuditProgress& p) {
     update([&](AuditSnapshot& s) {

@@ -72,6 +72,7 @@ struct AuditRequest {
   double tile_mm = 50000.0;
   int threads = 2;
   bool compute_depth = false;
+  bool compute_volume = false;
 };
 
 // A clash between two scene objects: the kernel's answer and who they are.

@@ -243,6 +243,23 @@ TEST(LayoutSession, EveryFrameEqualsAssessingEveryStaticObject) {
   EXPECT_EQ(session->move_to(bad).error().field, "pose");
 }
 
+TEST(SceneAudit, DepthAndVolumeOnRequestMatchTheCratesKnownOverlap) {
+  const auto& scene = small_factory();
+  std::vector<AuditObject> crates;
+  for (const AuditObject& o : scene.objects)
+    if (o.category == "crate") crates.push_back(o);
+  AuditOptions options;
+  options.compute_depth = true;
+  options.compute_volume = true;
+  const AuditResult r = audit_scene(crates, options).value();
+  ASSERT_EQ(r.clashes.size(), 10u);  // the deliberate clashes; near misses are beyond a 0 mm clearance
+  for (const PairClash& c : r.clashes) {
+    EXPECT_EQ(c.verdict, Verdict::kCollision);
+    EXPECT_NEAR(c.depth_mm, 5.0, 2e-3);              // 5 mm along x: exact for convex crates
+    EXPECT_NEAR(c.volume_mm3, 5.0 * 1000 * 1000, 1e-3);  // axis-aligned: the ray cast is exact
+  }
+}
+
 TEST(SceneAudit, BadInputNamesTheField) {
   std::vector<AuditObject> objects(2);
   objects[0].mesh = MeshBvh::build(testing::share(testing::box_mesh(Vec3::Zero(), Vec3::Ones()))).value();

@@ -2,6 +2,7 @@
 it (every frame answered), ask for a clearance, and audit the scene with a progress bar.
 
     /usr/bin/python3 -m gatekeeper_client.layout_tool [--address 127.0.0.1:50051] [--data ../shared/data]
+        [--report audit.html]   (the audit's page: 3D view and sortable clash table)
 """
 import argparse
 import hashlib
@@ -42,6 +43,7 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--address", default="127.0.0.1:50051")
     parser.add_argument("--data", default=DEFAULT_DATA)
+    parser.add_argument("--report", help="write the audit report page (HTML) here")
     args = parser.parse_args(argv)
     stub, _ = connect(args.address)
     robot = upload(stub, os.path.join(args.data, "meshes", "fcl", "rob.obj"))
@@ -75,16 +77,25 @@ def main(argv=None):
     print(f"clearance robot vs robot 1800 mm apart: {c.distance_mm:.3f} mm ({pb.Verdict.Name(c.verdict)}), "
           f"{c.pairs_within_gap} triangle pairs closer than 1000 mm, {c.elapsed_us:.0f} us")
 
-    job = stub.StartAudit(pb.StartAuditRequest(scene_id=scene.scene_id, clearance_mm=100.0), timeout=5)
+    # Robots may touch each other inside one cell (an intended contact): a rule leaves them out.
+    rule = pb.ContactRule(name="robots of one cell", category_a="robot", category_b="robot", same_group_only=True)
+    job = stub.StartAudit(pb.StartAuditRequest(scene_id=scene.scene_id, clearance_mm=100.0, rules=[rule]), timeout=5)
     last = None
     for p in stub.WatchAudit(pb.WatchAuditRequest(job_id=job.job_id), timeout=120):
         last = p
         print("\r  audit " + progress_bar(p), end="", flush=True)
     print()
-    report = stub.GetAuditReport(pb.GetAuditReportRequest(job_id=job.job_id), timeout=5)
-    print(f"audit {pb.AuditState.Name(report.progress.state)}: {len(report.clashes)} clashes")
+    report = stub.GetAuditReport(pb.GetAuditReportRequest(job_id=job.job_id, html=bool(args.report)), timeout=30)
+    print(f"audit {pb.AuditState.Name(report.progress.state)}: {len(report.clashes)} clashes "
+          f"({report.candidate_pairs} box pairs, {report.excluded_by_rules} excluded by rules)")
     for clash in report.clashes:
-        print(f"  {clash.object_a[:12]} x {clash.object_b[:12]}: {pb.Verdict.Name(clash.verdict)} {clash.distance_mm:.1f} mm")
+        print(f"  {clash.name_a} x {clash.name_b}: {pb.Verdict.Name(clash.verdict)} {clash.distance_mm:.1f} mm")
+    for group in report.by_category:
+        print(f"  {group.key}: {group.clashes} clashes, {group.collisions} collisions")
+    if args.report:
+        with open(args.report, "w", encoding="utf-8") as out:
+            out.write(report.html)
+        print(f"report page: {args.report}")
     return 0 if last is not None and report.progress.state == pb.DONE else 1
 
 

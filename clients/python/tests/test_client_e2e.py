@@ -70,7 +70,13 @@ class DaemonTest(unittest.TestCase):
         self.assertEqual(err.exception.code(), grpc.StatusCode.NOT_FOUND)
 
     def test_layout_tool_session(self):
-        self.assertEqual(layout_tool.main(["--address", self.address, "--data", SHARED]), 0)
+        with tempfile.TemporaryDirectory() as tmp:
+            page = os.path.join(tmp, "audit.html")
+            self.assertEqual(layout_tool.main(["--address", self.address, "--data", SHARED, "--report", page]), 0)
+            with open(page, encoding="utf-8") as f:
+                html = f.read()
+            self.assertIn('<canvas id="canvas">', html)
+            self.assertIn("layout demo", html)
 
     def test_sequencer_simulator_runs_and_finds_a_sequence(self):
         self.assertEqual(sequencer_sim.main(["--address", self.address, "--orders", "1"]), 0)

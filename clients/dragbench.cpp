@@ -1,0 +1,154 @@
+// gatekeeper-dragbench: a layout tool's drag through gatekeeperd, timed. It uploads a 1 m cube,
+// fills a new scene with a grid of copies (2 m pitch), then drags one more cube along the grid's
+// rows through a DragObject stream, 1,030 mm from the row's centre line so that every neighbour
+// passes 30 mm away (inside the clearance), and prints the per-frame round trip and the daemon's
+// own time per frame.
+//
+//   gatekeeper-dragbench --address 127.0.0.1:50051 [--objects 2000] [--frames 2000] [--clearance 50]
+#include "gatekeeper/v1/gatekeeper.grpc.pb.h"
+
+#include <CLI/CLI.hpp>
+#include <grpcpp/grpcpp.h>
+#include <openssl/evp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace pb = ::gatekeeper::v1;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+std::string cube_obj() {
+  std::string obj;
+  for (int k = 0; k < 8; ++k)
+    obj += std::string("v ") + ((k & 1) ? "500" : "-500") + ((k & 2) ? " 500" : " -500") + ((k & 4) ? " 1000\n" : " 0\n");
+  return obj + "f 1 3 4\nf 1 4 2\nf 5 6 8\nf 5 8 7\nf 1 2 6\nf 1 6 5\nf 3 7 8\nf 3 8 4\nf 1 5 7\nf 1 7 3\nf 2 4 8\nf 2 8 6\n";
+}
+
+std::string sha256_hex(const std::string& bytes) {
+  unsigned char digest[32];
+  unsigned int n = 0;
+  EVP_Digest(bytes.data(), bytes.size(), digest, &n, EVP_sha256(), nullptr);
+  std::string hex;
+  char buf[3];
+  for (unsigned i = 0; i < n; ++i) {
+    std::snprintf(buf, sizeof buf, "%02x", digest[i]);
+    hex += buf;
+  }
+  return hex;
+}
+
+pb::Pose at(double x, double y) {
+  pb::Pose p;
+  p.mutable_translation()->set_x_mm(x);
+  p.mutable_translation()->set_y_mm(y);
+  return p;
+}
+
+double pct(std::vector<double> v, double q) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string address = "127.0.0.1:50051";
+  int objects = 2000, frames = 2000;
+  double clearance = 50.0;
+  CLI::App app{"gatekeeper-dragbench: DragObject frame latency among many static objects"};
+  app.add_option("--address", address);
+  app.add_option("--objects", objects)->check(CLI::Range(1, 100000));
+  app.add_option("--frames", frames)->check(CLI::Range(1, 1000000));
+  app.add_option("--clearance", clearance)->check(CLI::Range(0.0, 1000.0));
+  CLI11_PARSE(app, argc, argv);
+  auto channel = grpc::CreateChannel(address, grpc::InsecureChannelCredentials());
+  if (!channel->WaitForConnected(std::chrono::system_clock::now() + std::chrono::seconds(10))) {
+    std::fprintf(stderr, "cannot connect to %s\n", address.c_str());
+    return 2;
+  }
+  auto stub = pb::Gatekeeper::NewStub(channel);
+  const std::string bytes = cube_obj();
+  pb::PartInfo cube;
+  {
+    grpc::ClientContext ctx;
+    auto writer = stub->UploadPart(&ctx, &cube);
+    pb::UploadPartChunk header;
+    header.mutable_header()->set_format("obj");
+    header.mutable_header()->set_size_bytes(bytes.size());
+    header.mutable_header()->set_sha256(sha256_hex(bytes));
+    writer->Write(header);
+    pb::UploadPartChunk data;
+    data.set_data(bytes);
+    writer->Write(data);
+    writer->WritesDone();
+    if (!writer->Finish().ok()) return 1;
+  }
+  pb::SceneInfo scene;
+  {
+    grpc::ClientContext ctx;
+    pb::CreateSceneRequest create;
+    create.set_name("dragbench");
+    if (!stub->CreateScene(&ctx, create, &scene).ok()) return 1;
+  }
+  const int side = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(objects))));
+  const auto t_fill = Clock::now();
+  for (int i = 0; i < objects; ++i) {
+    grpc::ClientContext ctx;
+    pb::PutObjectRequest put;
+    put.set_scene_id(scene.scene_id());
+    put.mutable_object()->set_part_id(cube.part_id());
+    put.mutable_object()->set_category("cube");
+    *put.mutable_object()->mutable_pose() = at(2000.0 * (i % side), 2000.0 * (i / side));
+    pb::MoveResult r;
+    if (!stub->PutObject(&ctx, put, &r).ok()) return 1;
+  }
+  const double fill_s = std::chrono::duration<double>(Clock::now() - t_fill).count();
+  std::string dragged;
+  {
+    grpc::ClientContext ctx;
+    pb::PutObjectRequest put;
+    put.set_scene_id(scene.scene_id());
+    put.mutable_object()->set_part_id(cube.part_id());
+    put.mutable_object()->set_name("dragged");
+    *put.mutable_object()->mutable_pose() = at(-3000, 1030);
+    pb::MoveResult r;
+    if (!stub->PutObject(&ctx, put, &r).ok()) return 1;
+    dragged = r.object_id();
+  }
+  grpc::ClientContext ctx;
+  auto stream = stub->DragObject(&ctx);
+  std::vector<double> round_trip_us, server_us;
+  long contacts = 0;
+  const double row_length = 2000.0 * side + 2000.0;
+  for (int f = 0; f < frames; ++f) {
+    // Along a row, 40 mm per frame, then on to the next row.
+    const double s = 40.0 * f;
+    const int row = static_cast<int>(s / row_length) % std::max(1, side - 1);
+    pb::MoveObjectRequest move;
+    move.set_scene_id(scene.scene_id());
+    move.set_object_id(dragged);
+    move.set_clearance_mm(clearance);
+    *move.mutable_pose() = at(-1000.0 + std::fmod(s, row_length), 2000.0 * row + 1030.0);
+    const auto t0 = Clock::now();
+    pb::MoveResult r;
+    if (!stream->Write(move) || !stream->Read(&r)) break;
+    round_trip_us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count());
+    server_us.push_back(r.elapsed_us());
+    contacts += r.contacts_size();
+  }
+  stream->WritesDone();
+  const grpc::Status status = stream->Finish();
+  std::printf("%d static objects (filled in %.1f s), %zu frames, clearance %.0f mm, %.2f contacts per frame\n", objects, fill_s,
+              round_trip_us.size(), clearance, static_cast<double>(contacts) / static_cast<double>(std::max<std::size_t>(1, round_trip_us.size())));
+  std::printf("round trip: p50 %.0f us, p90 %.0f us, p99 %.0f us, max %.0f us\n", pct(round_trip_us, 0.5), pct(round_trip_us, 0.9),
+              pct(round_trip_us, 0.99), pct(round_trip_us, 1.0));
+  std::printf("daemon (store + answer): p50 %.0f us, p90 %.0f us, p99 %.0f us, max %.0f us\n", pct(server_us, 0.5), pct(server_us, 0.9),
+              pct(server_us, 0.99), pct(server_us, 1.0));
+  return status.ok() && static_cast<int>(round_trip_us.size()) == frames ? 0 : 1;
+}
