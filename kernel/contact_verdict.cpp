@@ -60,6 +60,16 @@ bool triangle_pair_crosses(const MeshBvh& a, const RigidTransform& pose_a, std::
   return true;
 }
 
+int severity(Verdict v) {
+  switch (v) {
+    case Verdict::kClear: return 0;
+    case Verdict::kTouching: return 1;
+    case Verdict::kInconclusive: return 2;
+    case Verdict::kCollision: return 3;
+  }
+  return 3;
+}
+
 double winding_number(const TriangleMesh& mesh, const Vec3& point) {
   // Van Oosterom-Strackee solid angle of each triangle, summed.
   double total = 0.0;

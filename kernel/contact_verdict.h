@@ -26,6 +26,10 @@ enum class Verdict { kClear, kTouching, kCollision, kInconclusive };
 
 const char* to_string(Verdict v);
 
+// How much a verdict blocks, for taking the worst of several: CLEAR < TOUCHING < INCONCLUSIVE <
+// COLLISION (an inconclusive answer is treated as a denial, but a proven collision is worse).
+int severity(Verdict v);
+
 struct VerdictOptions {
   double contact_tolerance_mm = tolerances::kContactMm;
   std::size_t max_contacts = 10000;  // contacts reported at most

@@ -1,5 +1,7 @@
 #include "kernel/interference_volume.h"
 
+#include "kernel/bvh_ray.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -12,36 +14,9 @@ namespace {
 // Parameters t where origin + t * dir crosses the mesh (mesh-local ray), through the BVH.
 void crossings(const MeshBvh& m, const Vec3& origin, const Vec3& dir, std::vector<double>& out) {
   out.clear();
-  const MeshBvh::NodeView nodes = m.nodes();
-  const Vec3 inv(1.0 / dir.x(), 1.0 / dir.y(), 1.0 / dir.z());
-  int stack[128];
-  int top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const int n = stack[--top];
-    const auto& lo = nodes.min_point[n];
-    const auto& hi = nodes.max_point[n];
-    double t0 = -std::numeric_limits<double>::infinity(), t1 = std::numeric_limits<double>::infinity();
-    const double los[3] = {lo.x(), lo.y(), lo.z()}, his[3] = {hi.x(), hi.y(), hi.z()};
-    bool miss = false;
-    for (int k = 0; k < 3 && !miss; ++k) {
-      if (dir[k] == 0.0) {
-        miss = origin[k] < los[k] || origin[k] > his[k];
-        continue;
-      }
-      double a = (los[k] - origin[k]) * inv[k], b = (his[k] - origin[k]) * inv[k];
-      if (a > b) std::swap(a, b);
-      t0 = std::max(t0, a);
-      t1 = std::min(t1, b);
-      miss = t0 > t1;
-    }
-    if (miss) continue;
-    if (nodes.info[n].x() == 0) {
-      stack[top++] = nodes.info[n].y();
-      stack[top++] = nodes.info[n].z();
-      continue;
-    }
-    for (int k = nodes.info[n].y(); k <= nodes.info[n].z(); ++k) {
+  const double inf = std::numeric_limits<double>::infinity();
+  for_each_leaf_along(m, origin, dir, -inf, inf, 0.0, [&](int first, int last) {
+    for (int k = first; k <= last; ++k) {
       // Moller-Trumbore.
       const Triangle& tri = m.ordered_triangle(k);
       const Vec3 e1 = tri[1] - tri[0], e2 = tri[2] - tri[0];
@@ -56,7 +31,8 @@ void crossings(const MeshBvh& m, const Vec3& origin, const Vec3& dir, std::vecto
       if (v < 0.0 || u + v > 1.0) continue;
       out.push_back(e2.dot(q) / det);
     }
-  }
+    return true;
+  });
   std::sort(out.begin(), out.end());
 }
 

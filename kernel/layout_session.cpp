@@ -48,15 +48,6 @@ std::pair<double, Vec3> best_box_axis(const OrientedBox& a, const OrientedBox& b
   return best;
 }
 
-int severity(Verdict v) {
-  switch (v) {
-    case Verdict::kClear: return 0;
-    case Verdict::kTouching: return 1;
-    case Verdict::kInconclusive: return 2;
-    case Verdict::kCollision: return 3;
-  }
-  return 3;
-}
 
 }  // namespace
 

@@ -1,5 +1,6 @@
 #include "kernel/point_containment.h"
 
+#include "kernel/bvh_ray.h"
 #include "kernel/exact_predicates.h"
 
 #include <array>
@@ -18,57 +19,31 @@ using exact::orient3d;
 
 // Crossings of segment p-q with the mesh; nullopt when some test was degenerate.
 std::optional<int> crossings(const MeshBvh& mesh, const Vec3& p, const Vec3& q, double slack) {
-  const MeshBvh::NodeView nodes = mesh.nodes();
-  const Vec3 dir = q - p;
   int count = 0;
-  int stack[128];
-  int top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const int n = stack[--top];
-    const auto& lo = nodes.min_point[n];
-    const auto& hi = nodes.max_point[n];
-    const double los[3] = {lo.x() - slack, lo.y() - slack, lo.z() - slack};
-    const double his[3] = {hi.x() + slack, hi.y() + slack, hi.z() + slack};
-    double t0 = 0.0, t1 = 1.0;
-    bool miss = false;
-    for (int k = 0; k < 3 && !miss; ++k) {
-      if (dir[k] == 0.0) {
-        miss = p[k] < los[k] || p[k] > his[k];
-        continue;
-      }
-      double a = (los[k] - p[k]) / dir[k], b = (his[k] - p[k]) / dir[k];
-      if (a > b) std::swap(a, b);
-      t0 = std::max(t0, a);
-      t1 = std::min(t1, b);
-      miss = t0 > t1;
-    }
-    if (miss) continue;
-    if (nodes.info[n].x() == 0) {
-      stack[top++] = nodes.info[n].y();
-      stack[top++] = nodes.info[n].z();
-      continue;
-    }
-    for (int k = nodes.info[n].y(); k <= nodes.info[n].z(); ++k) {
+  bool degenerate = false;
+  for_each_leaf_along(mesh, p, q - p, 0.0, 1.0, slack, [&](int first, int last) {
+    for (int k = first; k <= last; ++k) {
       if (mesh.ordered_is_degenerate(k)) continue;  // zero area: no side to cross
       const Triangle& t = mesh.ordered_triangle(k);
-      const int sp = (orient3d(t[0], t[1], t[2], p)), sq = (orient3d(t[0], t[1], t[2], q));
+      const int sp = orient3d(t[0], t[1], t[2], p), sq = orient3d(t[0], t[1], t[2], q);
       if (sp == 0) {
         // The start lies in this triangle's plane: degenerate only if it is on the triangle.
-        const int e0 = (orient3d(p, q, t[0], t[1])), e1 = (orient3d(p, q, t[1], t[2])), e2 = (orient3d(p, q, t[2], t[0]));
-        if ((e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0)) return std::nullopt;
+        const int e0 = orient3d(p, q, t[0], t[1]), e1 = orient3d(p, q, t[1], t[2]), e2 = orient3d(p, q, t[2], t[0]);
+        if ((e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0)) return !(degenerate = true);
         continue;
       }
-      if (sq == 0) return std::nullopt;  // the far end cannot be on the mesh; be safe
+      if (sq == 0) return !(degenerate = true);  // the far end cannot be on the mesh; be safe
       if (sp == sq) continue;
-      const int e0 = (orient3d(p, q, t[0], t[1])), e1 = (orient3d(p, q, t[1], t[2])), e2 = (orient3d(p, q, t[2], t[0]));
+      const int e0 = orient3d(p, q, t[0], t[1]), e1 = orient3d(p, q, t[1], t[2]), e2 = orient3d(p, q, t[2], t[0]);
       if (e0 == 0 || e1 == 0 || e2 == 0) {
-        if ((e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0)) return std::nullopt;  // through an edge or vertex
+        if ((e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0)) return !(degenerate = true);  // through an edge or vertex
         continue;
       }
       if (e0 == e1 && e1 == e2) ++count;
     }
-  }
+    return true;
+  });
+  if (degenerate) return std::nullopt;
   return count;
 }
 

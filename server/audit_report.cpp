@@ -30,8 +30,8 @@ void add_groups(const std::map<std::string, Count>& counts, google::protobuf::Re
 
 }  // namespace
 
-Result<AuditRequest> to_audit_request(const pb::StartAuditRequest& in, int default_threads) {
-  AuditRequest out;
+Result<AuditOptions> to_audit_options(const pb::StartAuditRequest& in, int default_threads) {
+  AuditOptions out;
   if (!std::isfinite(in.clearance_mm()) || in.clearance_mm() < 0.0) return invalid_argument("clearance_mm", "must be a finite distance >= 0");
   if (!std::isfinite(in.tile_mm()) || in.tile_mm() < 0.0) return invalid_argument("tile_mm", "must be a finite length >= 0");
   if (in.threads() > kMaxAuditThreads) return invalid_argument("threads", "at most 64");

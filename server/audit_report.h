@@ -10,7 +10,7 @@ namespace gk::server {
 namespace pb = ::gatekeeper::v1;
 
 // default_threads replaces threads = 0; tile_mm = 0 becomes 50 m.
-Result<AuditRequest> to_audit_request(const pb::StartAuditRequest& in, int default_threads);
+Result<AuditOptions> to_audit_options(const pb::StartAuditRequest& in, int default_threads);
 
 // Clashes, their groups and the job's statistics (the progress is filled separately).
 void report_to_proto(const AuditSnapshot& snapshot, pb::AuditReport* out);

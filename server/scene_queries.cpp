@@ -24,15 +24,6 @@ Result<Placed> place(const SceneObjectRecord& o, PartRegistry& parts) {
   return Placed{&o, part.value(), pose, transformed_box(part.value()->mesh->bounds(), pose)};
 }
 
-int severity(Verdict v) {
-  switch (v) {
-    case Verdict::kClear: return 0;
-    case Verdict::kTouching: return 1;
-    case Verdict::kInconclusive: return 2;
-    case Verdict::kCollision: return 3;
-  }
-  return 2;
-}
 
 }  // namespace
 
@@ -143,13 +134,7 @@ void AuditJob::run(PartRegistry& parts) {
     const SceneObjectRecord& b = *records[c.b];
     return ClashRecord{a.id, b.id, a.name, b.name, a.category, b.category, c};
   };
-  AuditOptions options;
-  options.clearance_mm = request_.clearance_mm;
-  options.rules = request_.rules;
-  options.tile_mm = request_.tile_mm;
-  options.threads = request_.threads;
-  options.compute_depth = request_.compute_depth;
-  options.compute_volume = request_.compute_volume;
+  AuditOptions options = options_;
   options.cancel = &cancelled_;
   options.on_progress = [this](const AuditProgress& p) {
     update([&](AuditSnapshot& s) {

@@ -65,16 +65,6 @@ class DragSession {
 Result<MoveOutcome> object_contacts(const SceneRecord& scene, const std::string& object_id, double clearance_mm,
                                     PartRegistry& parts);
 
-// What an audit is asked to do (StartAuditRequest, checked).
-struct AuditRequest {
-  double clearance_mm = 0.0;
-  std::vector<ContactRule> rules;
-  double tile_mm = 50000.0;
-  int threads = 2;
-  bool compute_depth = false;
-  bool compute_volume = false;
-};
-
 // A clash between two scene objects: the kernel's answer and who they are.
 struct ClashRecord {
   std::string a, b;  // object ids, a < b
@@ -106,8 +96,10 @@ struct AuditSnapshot {
 // keeps its results (partial if cancelled). With a finished baseline job it is a re-audit.
 class AuditJob {
  public:
-  AuditJob(SceneRecord scene, AuditRequest request, std::shared_ptr<const AuditJob> baseline = nullptr)
-      : scene_(std::move(scene)), request_(std::move(request)), baseline_(std::move(baseline)) {}
+  // options: what to compute (clearance, rules, tiles, threads, depth, volume); the job adds its
+  // cancellation flag and progress reporting.
+  AuditJob(SceneRecord scene, AuditOptions options, std::shared_ptr<const AuditJob> baseline = nullptr)
+      : scene_(std::move(scene)), options_(std::move(options)), baseline_(std::move(baseline)) {}
   void run(PartRegistry& parts);
   void cancel() { cancelled_ = true; }
   AuditSnapshot snapshot() const;
@@ -120,7 +112,7 @@ class AuditJob {
   void update(const std::function<void(AuditSnapshot&)>& change);
   void fail(const Error& error);
   SceneRecord scene_;
-  AuditRequest request_;
+  AuditOptions options_;
   std::shared_ptr<const AuditJob> baseline_;
   std::atomic<bool> cancelled_{false};
   std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();

@@ -221,7 +221,7 @@ grpc::ServerUnaryReactor* GatekeeperService::GetScene(grpc::CallbackServerContex
 grpc::ServerUnaryReactor* GatekeeperService::StartAudit(grpc::CallbackServerContext* ctx, const pb::StartAuditRequest* request,
                                                         pb::AuditJob* response) {
   const auto t0 = Clock::now();
-  auto checked = to_audit_request(*request, options_.audit_threads);
+  auto checked = to_audit_options(*request, options_.audit_threads);
   if (!checked.ok()) return finish(ctx, stats_, "StartAudit", t0, to_status(checked.error()));
   auto scene = scenes_.get(request->scene_id());
   if (!scene.ok()) return finish(ctx, stats_, "StartAudit", t0, to_status(scene.error()));

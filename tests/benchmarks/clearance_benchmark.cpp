@@ -13,6 +13,7 @@
 #include "occt_adapters/shape_builders.h"
 #include "occt_adapters/shape_import.h"
 #include "occt_adapters/shape_mesher.h"
+#include "tests/benchmarks/latency_counters.h"
 #include "tests/support/random_meshes.h"
 
 #include <benchmark/benchmark.h>
@@ -39,17 +40,7 @@ T must(gk::Result<T> r) {
   return std::move(r).value();
 }
 
-void report(benchmark::State& state, std::vector<double> us) {
-  std::sort(us.begin(), us.end());
-  double total = 0.0;
-  for (double x : us) total += x;
-  state.counters["mean_us"] = total / static_cast<double>(us.size());
-  state.counters["p10_us"] = us[us.size() / 10];
-  state.counters["median_us"] = us[us.size() / 2];
-  state.counters["p90_us"] = us[us.size() * 9 / 10];
-  state.counters["max_us"] = us.back();
-  state.counters["queries"] = static_cast<double>(us.size());
-}
+void report(benchmark::State& state, const std::vector<double>& us) { gk::bench::report_latencies(state, us); }
 
 double since(Clock::time_point t0) { return std::chrono::duration<double, std::micro>(Clock::now() - t0).count(); }
 

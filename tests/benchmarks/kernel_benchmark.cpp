@@ -8,6 +8,7 @@
 #include "kernel/mesh_collision.h"
 #include "kernel/mesh_distance.h"
 #include "mesh_io/mesh_file_reader.h"
+#include "tests/benchmarks/latency_counters.h"
 #include "tests/support/random_meshes.h"
 
 #include <benchmark/benchmark.h>
@@ -91,16 +92,7 @@ struct Timings {
   std::vector<double> us;
   void add(Clock::time_point t0) { us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count()); }
   void report(benchmark::State& state, double checksum) {
-    std::sort(us.begin(), us.end());
-    double total = 0.0;
-    for (double x : us) total += x;
-    state.counters["mean_us"] = total / static_cast<double>(us.size());
-    state.counters["p10_us"] = us[us.size() / 10];
-    state.counters["median_us"] = us[us.size() / 2];
-    state.counters["p90_us"] = us[us.size() * 9 / 10];
-    state.counters["p99_us"] = us[us.size() * 99 / 100];
-    state.counters["max_us"] = us.back();
-    state.counters["queries"] = static_cast<double>(us.size());
+    gk::bench::report_latencies(state, us);
     state.counters["checksum"] = checksum;
   }
 };

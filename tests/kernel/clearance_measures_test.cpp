@@ -151,32 +151,9 @@ TEST(PenetrationDepth, NonConvexPartsGetACertifiedBoundNoWorseThanSampling) {
   EXPECT_GE(measured, 3);
 }
 
-// A closed prism over a regular n-gon: a polyhedral cylinder of radius r about z, z in [0, h].
-TriangleMesh cylinder(double r, double h, int n) {
-  std::vector<Vec3> v;
-  std::vector<TriangleMesh::Face> f;
-  for (int i = 0; i < n; ++i) {
-    const double t = 2.0 * kPi * i / n;
-    v.emplace_back(r * std::cos(t), r * std::sin(t), 0.0);
-    v.emplace_back(r * std::cos(t), r * std::sin(t), h);
-  }
-  const auto bottom_centre = static_cast<std::uint32_t>(v.size());
-  v.emplace_back(0, 0, 0);
-  v.emplace_back(0, 0, h);
-  for (int i = 0; i < n; ++i) {
-    const auto a0 = static_cast<std::uint32_t>(2 * i), a1 = a0 + 1;
-    const auto b0 = static_cast<std::uint32_t>(2 * ((i + 1) % n)), b1 = b0 + 1;
-    f.push_back({a0, b0, b1});
-    f.push_back({a0, b1, a1});
-    f.push_back({bottom_centre, b0, a0});
-    f.push_back({bottom_centre + 1, a1, b1});
-  }
-  return TriangleMesh::create(std::move(v), std::move(f)).value();
-}
-
 TEST(InterferenceVolume, ACylinderCutByABoxMatchesTheCircularSegment) {
   // R10 x 20 cylinder, box x >= 4 cutting it: the circular segment's area times the height.
-  const TriangleMesh cyl = cylinder(10.0, 20.0, 512);
+  const TriangleMesh cyl = testing::cylinder_mesh(10.0, 20.0, 512);
   ASSERT_TRUE(cyl.report().closed);
   ASSERT_TRUE(cyl.report().consistently_oriented);
   const auto c = MeshBvh::build(testing::share(cyl)).value();

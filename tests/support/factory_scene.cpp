@@ -24,29 +24,6 @@ std::shared_ptr<const MeshBvh> bvh_of(TriangleMesh mesh) {
   return g_cache ? g_cache->get_or_build(shared).value() : MeshBvh::build(shared).value();
 }
 
-// A closed prism over a regular n-gon about z, z in [0, length] (pipes along x are turned).
-TriangleMesh cylinder_mesh(double radius, double length, int sides) {
-  std::vector<Vec3> v;
-  std::vector<TriangleMesh::Face> f;
-  for (int i = 0; i < sides; ++i) {
-    const double t = 2.0 * kPi * i / sides;
-    v.emplace_back(radius * std::cos(t), radius * std::sin(t), 0.0);
-    v.emplace_back(radius * std::cos(t), radius * std::sin(t), length);
-  }
-  const auto c = static_cast<std::uint32_t>(v.size());
-  v.emplace_back(0, 0, 0);
-  v.emplace_back(0, 0, length);
-  for (int i = 0; i < sides; ++i) {
-    const auto a0 = static_cast<std::uint32_t>(2 * i), a1 = a0 + 1;
-    const auto b0 = static_cast<std::uint32_t>(2 * ((i + 1) % sides)), b1 = b0 + 1;
-    f.push_back({a0, b0, b1});
-    f.push_back({a0, b1, a1});
-    f.push_back({c, b0, a0});
-    f.push_back({c + 1, a1, b1});
-  }
-  return TriangleMesh::create(std::move(v), std::move(f)).value();
-}
-
 // A shared mesh from ../shared/data, scaled (robot meshes are in metres) and moved so its box
 // starts at z = 0 and is centred in x and y.
 std::shared_ptr<const MeshBvh> shared_mesh(const std::string& relative, double scale) {

@@ -74,4 +74,27 @@ std::shared_ptr<const TriangleMesh> share(TriangleMesh mesh) {
 
 std::string shared_data(const std::string& relative) { return std::string(GATEKEEPER_SHARED_DATA) + "/" + relative; }
 
+TriangleMesh cylinder_mesh(double radius, double length, int sides) {
+  std::vector<Vec3> v;
+  std::vector<TriangleMesh::Face> f;
+  for (int i = 0; i < sides; ++i) {
+    const double t = 2.0 * 3.14159265358979323846 * i / sides;
+    v.emplace_back(radius * std::cos(t), radius * std::sin(t), 0.0);
+    v.emplace_back(radius * std::cos(t), radius * std::sin(t), length);
+  }
+  const auto c = static_cast<std::uint32_t>(v.size());
+  v.emplace_back(0, 0, 0);
+  v.emplace_back(0, 0, length);
+  for (int i = 0; i < sides; ++i) {
+    const auto a0 = static_cast<std::uint32_t>(2 * i), a1 = a0 + 1;
+    const auto b0 = static_cast<std::uint32_t>(2 * ((i + 1) % sides)), b1 = b0 + 1;
+    f.push_back({a0, b0, b1});
+    f.push_back({a0, b1, a1});
+    f.push_back({c, b0, a0});
+    f.push_back({c + 1, a1, b1});
+  }
+  return TriangleMesh::create(std::move(v), std::move(f)).value();
+}
+
+
 }  // namespace gk::testing

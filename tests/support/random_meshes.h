@@ -20,6 +20,10 @@ TriangleMesh random_closed_blob(Rng& rng, int subdivisions, double radius, doubl
 // An axis-aligned box as a closed, outward-oriented 12-triangle mesh.
 TriangleMesh box_mesh(const Vec3& min, const Vec3& max);
 
+// A closed, outward-oriented prism over a regular n-gon about z, z in [0, length]: a polyhedral
+// cylinder.
+TriangleMesh cylinder_mesh(double radius, double length, int sides);
+
 // A soup of n random triangles of edge length up to size inside a cube of half side extent.
 TriangleMesh random_soup(Rng& rng, int n, double extent, double size);
 
