@@ -54,6 +54,15 @@ Result<TriangleMesh> PartRegistry::read_any(const std::string& path, const std::
 }
 
 Result<std::shared_ptr<const LoadedPart>> PartRegistry::load(const std::string& id, double deflection_mm) {
+  // Parts never change (the id is their content's hash): a loaded one is answered from memory,
+  // without asking the database. Mesh parts are kept under deflection 0, CAD parts under theirs.
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (double key : {0.0, deflection_mm}) {
+      auto it = loaded_.find({id, key});
+      if (it != loaded_.end()) return it->second;
+    }
+  }
   auto record = store_.get(id);
   if (!record.ok()) return record.error();
   const double key_deflection = is_cad_format(record.value().format) ? deflection_mm : 0.0;

@@ -40,12 +40,17 @@ Result<PlacedScene> place_scene(const SceneRecord& scene, PartRegistry& parts) {
   return out;
 }
 
-Result<MoveOutcome> DragSession::move(const SceneRecord& scene, const std::string& object_id, double clearance_mm,
-                                      const RigidTransform& pose, PartRegistry& parts) {
+Result<MoveOutcome> DragSession::move(const std::string& scene_id, std::uint64_t scene_version,
+                                      const std::function<Result<SceneRecord>()>& read_scene, const std::string& object_id,
+                                      double clearance_mm, const RigidTransform& pose, PartRegistry& parts) {
   // Still valid when only this stream's own moves happened since (one version each).
-  const bool same = session_ && scene.id == scene_id_ && object_id == object_id_ && clearance_mm == clearance_mm_ &&
-                    scene.version == version_ + 1;
+  const bool same = session_ && scene_id == scene_id_ && object_id == object_id_ && clearance_mm == clearance_mm_ &&
+                    scene_version == version_ + 1;
   if (!same) {
+    auto read = read_scene();
+    if (!read.ok()) return read.error();
+    const SceneRecord& scene = read.value();
+    scene_version = scene.version;
     auto placed = place_scene(scene, parts);
     if (!placed.ok()) return placed.error();
     auto it = placed.value().index_of.find(object_id);
@@ -59,7 +64,7 @@ Result<MoveOutcome> DragSession::move(const SceneRecord& scene, const std::strin
     object_id_ = object_id;
     clearance_mm_ = clearance_mm;
   }
-  version_ = scene.version;
+  version_ = scene_version;
   auto frame = session_->move_to(pose);
   if (!frame.ok()) return frame.error();
   MoveOutcome out;

@@ -48,9 +48,11 @@ Result<PlacedScene> place_scene(const SceneRecord& scene, PartRegistry& parts);
 // scene, rebuilt otherwise.
 class DragSession {
  public:
-  // The scene as stored after this move (the moved object already at `pose`).
-  Result<MoveOutcome> move(const SceneRecord& scene, const std::string& object_id, double clearance_mm,
-                           const RigidTransform& pose, PartRegistry& parts);
+  // After the move is stored: the scene's version then, and how to read the whole scene (only
+  // called when the session must be rebuilt: a copy of 10,000 objects costs milliseconds).
+  Result<MoveOutcome> move(const std::string& scene_id, std::uint64_t scene_version,
+                           const std::function<Result<SceneRecord>()>& read_scene, const std::string& object_id,
+                           double clearance_mm, const RigidTransform& pose, PartRegistry& parts);
 
  private:
   std::unique_ptr<LayoutSession> session_;

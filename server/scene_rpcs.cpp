@@ -148,14 +148,21 @@ grpc::Status GatekeeperService::move(const pb::MoveObjectRequest& request, pb::M
   const auto t0 = Clock::now();
   auto pose = to_stored_pose(request.pose(), "pose");
   if (!pose.ok()) return to_status(pose.error());
-  auto moved = scenes_.move(request.scene_id(), request.object_id(), pose.value());
-  if (!moved.ok()) return to_status(moved.error());
-  auto scene = scenes_.get(request.scene_id());
-  if (!scene.ok()) return to_status(scene.error());
   if (!std::isfinite(request.clearance_mm()) || request.clearance_mm() < 0.0)
     return {grpc::StatusCode::INVALID_ARGUMENT, "clearance_mm: must be a finite distance >= 0"};
-  auto outcome = drag ? drag->move(scene.value(), request.object_id(), request.clearance_mm(), pose.value().transform(), parts_)
-                      : object_contacts(scene.value(), request.object_id(), request.clearance_mm(), parts_);
+  auto moved = scenes_.move(request.scene_id(), request.object_id(), pose.value());
+  if (!moved.ok()) return to_status(moved.error());
+  Result<MoveOutcome> outcome = Error{};
+  if (drag) {
+    auto version = scenes_.version(request.scene_id());
+    if (!version.ok()) return to_status(version.error());
+    outcome = drag->move(request.scene_id(), version.value(), [&] { return scenes_.get(request.scene_id()); }, request.object_id(),
+                         request.clearance_mm(), pose.value().transform(), parts_);
+  } else {
+    auto scene = scenes_.get(request.scene_id());
+    if (!scene.ok()) return to_status(scene.error());
+    outcome = object_contacts(scene.value(), request.object_id(), request.clearance_mm(), parts_);
+  }
   if (!outcome.ok()) return to_status(outcome.error());
   response->set_object_id(request.object_id());
   response->set_verdict(to_proto(outcome.value().verdict));

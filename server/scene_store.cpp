@@ -101,6 +101,13 @@ Result<SceneRecord> SceneStore::get(const std::string& scene_id) const {
   return it->second;
 }
 
+Result<std::uint64_t> SceneStore::version(const std::string& scene_id) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto it = scenes_.find(scene_id);
+  if (it == scenes_.end()) return Error{ErrorCode::kNotFound, "scene_id", "no scene '" + scene_id + "'"};
+  return it->second.version;
+}
+
 Result<bool> SceneStore::write_object(const std::string& scene_id, const SceneObjectRecord& o) {
   sqlite3_stmt* stmt = nullptr;
   sqlite3_prepare_v2(db_, "INSERT OR REPLACE INTO scene_objects (scene_id, id, name, category, part_id, tx, ty, tz, ax, ay, az, angle, grp)"

@@ -42,6 +42,8 @@ class SceneStore {
 
   Result<SceneRecord> create(const std::string& name);
   Result<SceneRecord> get(const std::string& scene_id) const;
+  // The scene's change counter alone (no copy of its objects): how a drag knows nobody else edited.
+  Result<std::uint64_t> version(const std::string& scene_id) const;
   // Inserts or replaces; an empty object id gets a new one. Returns the stored object.
   Result<SceneObjectRecord> put(const std::string& scene_id, SceneObjectRecord object);
   Result<SceneObjectRecord> move(const std::string& scene_id, const std::string& object_id, const StoredPose& pose);
