@@ -101,7 +101,15 @@ void refine_on_brep(const PosedSide& a, const PosedSide& b, double mesh_distance
   response->set_gap_violated(best < safety_gap_mm);
 }
 
-std::string add_depth(const PosedSide& a, const PosedSide& b, pb::ClearanceQueryResponse* response) {
+std::string add_depth(const PosedSide& a, const PosedSide& b, const Vec3& along, pb::ClearanceQueryResponse* response) {
+  if (along != Vec3::Zero()) {
+    auto d = penetration_along(*a.part->bvh, a.pose, *b.part->bvh, b.pose, along, kDepthResolutionMm);
+    if (!d.ok()) return "depth: " + d.error().to_string() + "; ";
+    to_proto(Vec3(along.normalized()), response->mutable_depth_direction());
+    response->set_depth_mm(d.value().depth_mm);
+    response->set_depth_method("along the requested direction");
+    return "";
+  }
   auto depth = penetration_vector(*a.part->bvh, a.pose, *b.part->bvh, b.pose, kDepthLatticeDirections, kDepthResolutionMm);
   if (!depth.ok()) return "depth: " + depth.error().to_string() + "; ";
   const DepthVector& d = depth.value();
@@ -186,7 +194,9 @@ grpc::Status answer_clearance(const pb::ClearanceQueryRequest& request, PartRegi
     refine_on_brep(a, b, v.distance_mm, request.safety_gap_mm(), response);
   const bool interpenetrating = v.verdict == Verdict::kCollision;
   std::string not_computed;
-  if (interpenetrating && request.compute_depth()) not_computed += add_depth(a, b, response);
+  const Vec3 along(request.depth_along().x_mm(), request.depth_along().y_mm(), request.depth_along().z_mm());
+  if (!along.allFinite()) return {grpc::StatusCode::INVALID_ARGUMENT, "depth_along: must be finite"};
+  if (interpenetrating && request.compute_depth()) not_computed += add_depth(a, b, along, response);
   if (interpenetrating && request.compute_volume()) not_computed += add_volume(a, b, response);
   response->set_not_computed(not_computed);
   if (!response->refined_on_brep())

@@ -260,6 +260,13 @@ TEST(GatekeeperdE2E, ClearanceQueryMatchesTheKernelAndRefusesOverload) {
   EXPECT_EQ(deep.depth_method(), "convex-piece or part axis");
   EXPECT_GT(vec_x(deep.depth_direction()), 0.999);
   EXPECT_EQ(deep.volume_method(), "mesh ray cast");
+  // Along a requested direction: +y frees B after the cube's full 10 mm.
+  overlap.mutable_depth_along()->set_y_mm(3.0);
+  grpc::ClientContext actx;
+  ASSERT_TRUE(stub->ClearanceQuery(&actx, overlap, &deep).ok());
+  EXPECT_NEAR(deep.depth_mm(), 10.0, 1e-3);
+  EXPECT_EQ(deep.depth_method(), "along the requested direction");
+  overlap.clear_depth_along();
   EXPECT_GE(deep.regions_size(), 1);
   EXPECT_LT(deep.error_bound_mm(), 1e-6);
   overlap.mutable_a()->set_part_id(rob.part_id());
