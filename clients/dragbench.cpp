@@ -1,5 +1,5 @@
 // gatekeeper-dragbench: a layout tool's drag through gatekeeperd, timed. It uploads a 1 m cube,
-// fills a new scene with a grid of copies (2 m pitch), then drags one more cube along the grid's
+// fills a new scene with a grid of copies (2 m pitch, one PutObjects batch), then drags one more cube along the grid's
 // rows through a DragObject stream, 1,030 mm from the row's centre line so that every neighbour
 // passes 30 mm away (inside the clearance), and prints the per-frame round trip and the daemon's
 // own time per frame.
@@ -98,15 +98,18 @@ int main(int argc, char** argv) {
   }
   const int side = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(objects))));
   const auto t_fill = Clock::now();
+  pb::PutObjectsRequest batch;
+  batch.set_scene_id(scene.scene_id());
   for (int i = 0; i < objects; ++i) {
-    grpc::ClientContext ctx;
-    pb::PutObjectRequest put;
-    put.set_scene_id(scene.scene_id());
-    put.mutable_object()->set_part_id(cube.part_id());
-    put.mutable_object()->set_category("cube");
-    *put.mutable_object()->mutable_pose() = at(2000.0 * (i % side), 2000.0 * (i / side));
-    pb::MoveResult r;
-    if (!stub->PutObject(&ctx, put, &r).ok()) return 1;
+    pb::SceneObject* o = batch.add_objects();
+    o->set_part_id(cube.part_id());
+    o->set_category("cube");
+    *o->mutable_pose() = at(2000.0 * (i % side), 2000.0 * (i / side));
+  }
+  {
+    grpc::ClientContext fill;
+    pb::PutObjectsResponse ids;
+    if (!stub->PutObjects(&fill, batch, &ids).ok()) return 1;
   }
   const double fill_s = std::chrono::duration<double>(Clock::now() - t_fill).count();
   std::string dragged;

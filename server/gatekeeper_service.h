@@ -57,6 +57,8 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
                                         pb::SceneInfo* response) override;
   grpc::ServerUnaryReactor* PutObject(grpc::CallbackServerContext* ctx, const pb::PutObjectRequest* request,
                                       pb::MoveResult* response) override;
+  grpc::ServerUnaryReactor* PutObjects(grpc::CallbackServerContext* ctx, const pb::PutObjectsRequest* request,
+                                       pb::PutObjectsResponse* response) override;
   grpc::ServerUnaryReactor* MoveObject(grpc::CallbackServerContext* ctx, const pb::MoveObjectRequest* request,
                                        pb::MoveResult* response) override;
   grpc::ServerBidiReactor<pb::MoveObjectRequest, pb::MoveResult>* DragObject(grpc::CallbackServerContext* ctx) override;

@@ -7,6 +7,7 @@
 #include "server/rpc_helpers.h"
 
 #include <cmath>
+#include <set>
 #include <thread>
 
 namespace gk::server {
@@ -195,6 +196,30 @@ grpc::ServerUnaryReactor* GatekeeperService::PutObject(grpc::CallbackServerConte
   *as_move.mutable_pose() = in.pose();
   as_move.set_clearance_mm(request->clearance_mm());
   return finish(ctx, stats_, "PutObject", t0, move(as_move, response));
+}
+
+grpc::ServerUnaryReactor* GatekeeperService::PutObjects(grpc::CallbackServerContext* ctx, const pb::PutObjectsRequest* request,
+                                                        pb::PutObjectsResponse* response) {
+  const auto t0 = Clock::now();
+  // Every object is checked before anything is stored, so a bad one leaves the scene as it was.
+  std::vector<SceneObjectRecord> objects;
+  std::set<std::string> known_parts;
+  for (int i = 0; i < request->objects_size(); ++i) {
+    const pb::SceneObject& in = request->objects(i);
+    const std::string field = "objects[" + std::to_string(i) + "]";
+    if (!known_parts.count(in.part_id())) {
+      auto part = parts_.store().get(in.part_id());
+      if (!part.ok()) return finish(ctx, stats_, "PutObjects", t0, to_status(Error{part.error().code, field + ".part_id", part.error().message}));
+      known_parts.insert(in.part_id());
+    }
+    auto pose = to_stored_pose(in.pose(), field + ".pose");
+    if (!pose.ok()) return finish(ctx, stats_, "PutObjects", t0, to_status(pose.error()));
+    objects.push_back({in.object_id(), in.name(), in.category(), in.part_id(), pose.value(), in.group()});
+  }
+  auto stored = scenes_.put_many(request->scene_id(), std::move(objects));
+  if (!stored.ok()) return finish(ctx, stats_, "PutObjects", t0, to_status(stored.error()));
+  for (const SceneObjectRecord& o : stored.value()) response->add_object_ids(o.id);
+  return finish(ctx, stats_, "PutObjects", t0, grpc::Status::OK);
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::MoveObject(grpc::CallbackServerContext* ctx, const pb::MoveObjectRequest* request,

@@ -141,6 +141,29 @@ Result<SceneObjectRecord> SceneStore::put(const std::string& scene_id, SceneObje
   return object;
 }
 
+Result<std::vector<SceneObjectRecord>> SceneStore::put_many(const std::string& scene_id, std::vector<SceneObjectRecord> objects) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto it = scenes_.find(scene_id);
+  if (it == scenes_.end()) return Error{ErrorCode::kNotFound, "scene_id", "no scene '" + scene_id + "'"};
+  for (SceneObjectRecord& o : objects)
+    if (o.id.empty()) o.id = new_id("obj");
+  sqlite3_exec(db_, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr);
+  for (const SceneObjectRecord& o : objects) {
+    auto written = write_object(scene_id, o);
+    if (!written.ok()) {
+      sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+      return written.error();
+    }
+  }
+  if (sqlite3_exec(db_, "COMMIT", nullptr, nullptr, nullptr) != SQLITE_OK) {
+    sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+    return storage_error("cannot commit the objects");
+  }
+  for (const SceneObjectRecord& o : objects) it->second.objects[o.id] = o;
+  ++it->second.version;
+  return objects;
+}
+
 Result<SceneObjectRecord> SceneStore::move(const std::string& scene_id, const std::string& object_id, const StoredPose& pose) {
   std::lock_guard<std::mutex> lock(mutex_);
   auto it = scenes_.find(scene_id);

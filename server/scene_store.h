@@ -46,6 +46,8 @@ class SceneStore {
   Result<std::uint64_t> version(const std::string& scene_id) const;
   // Inserts or replaces; an empty object id gets a new one. Returns the stored object.
   Result<SceneObjectRecord> put(const std::string& scene_id, SceneObjectRecord object);
+  // All or nothing, in one transaction; returns the stored objects (with their ids) in order.
+  Result<std::vector<SceneObjectRecord>> put_many(const std::string& scene_id, std::vector<SceneObjectRecord> objects);
   Result<SceneObjectRecord> move(const std::string& scene_id, const std::string& object_id, const StoredPose& pose);
   Result<SceneRecord> remove(const std::string& scene_id, const std::string& object_id);
 

@@ -9,6 +9,7 @@
 #include "tests/support/random_meshes.h"
 
 #include <gtest/gtest.h>
+#include <signal.h>
 
 #include <cstdio>
 #include <algorithm>
@@ -322,6 +323,62 @@ TEST(AuditE2E, ADragStreamAnswersLikeSingleMovesEvenWhenOthersEditTheScene) {
   stream->WritesDone();
   EXPECT_TRUE(stream->Finish().ok());
   EXPECT_GT(frames_with_contacts, 10);
+}
+
+TEST(AuditE2E, PutObjectsStoresAWholeBatchOrNothingAndItSurvivesKill9) {
+  const std::string dir = testing::temp_dir("put-objects");
+  std::string scene_id;
+  {
+    Daemon daemon(dir);
+    auto stub = daemon.stub();
+    const std::string cube = upload(*stub, box_obj(1000, 1000, 1000), "obj");
+    grpc::ClientContext cctx;
+    pb::SceneInfo scene;
+    ASSERT_TRUE(stub->CreateScene(&cctx, pb::CreateSceneRequest(), &scene).ok());
+    scene_id = scene.scene_id();
+    pb::PutObjectsRequest batch;
+    batch.set_scene_id(scene_id);
+    for (int i = 0; i < 500; ++i) {
+      pb::SceneObject* o = batch.add_objects();
+      o->set_name("cube" + std::to_string(i));
+      o->set_category("cube");
+      o->set_group(i % 2 ? "odd" : "even");
+      o->set_part_id(cube);
+      *o->mutable_pose() = pose_of({"", "", "", "", Vec3(2000.0 * (i % 25), 2000.0 * (i / 25), 0)});
+    }
+    // One bad object: nothing of the batch is stored, and the error names it.
+    pb::PutObjectsRequest bad = batch;
+    bad.mutable_objects(321)->mutable_pose()->mutable_translation()->set_z_mm(std::nan(""));
+    pb::PutObjectsResponse ids;
+    grpc::ClientContext bctx;
+    const grpc::Status refused = stub->PutObjects(&bctx, bad, &ids);
+    EXPECT_EQ(refused.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+    EXPECT_NE(refused.error_message().find("objects[321].pose.translation"), std::string::npos) << refused.error_message();
+    bad = batch;
+    bad.mutable_objects(7)->set_part_id(std::string(64, 'f'));
+    grpc::ClientContext b2;
+    EXPECT_EQ(stub->PutObjects(&b2, bad, &ids).error_code(), grpc::StatusCode::NOT_FOUND);
+    grpc::ClientContext gctx;
+    pb::GetSceneRequest get;
+    get.set_scene_id(scene_id);
+    ASSERT_TRUE(stub->GetScene(&gctx, get, &scene).ok());
+    EXPECT_EQ(scene.objects_size(), 0);
+    grpc::ClientContext pctx;
+    ASSERT_TRUE(stub->PutObjects(&pctx, batch, &ids).ok());
+    EXPECT_EQ(ids.object_ids_size(), 500);
+    EXPECT_EQ(daemon.stop(SIGKILL), -SIGKILL);  // acknowledged: must survive
+  }
+  Daemon daemon(dir);
+  auto stub = daemon.stub();
+  grpc::ClientContext gctx;
+  pb::GetSceneRequest get;
+  get.set_scene_id(scene_id);
+  pb::SceneInfo scene;
+  ASSERT_TRUE(stub->GetScene(&gctx, get, &scene).ok());
+  ASSERT_EQ(scene.objects_size(), 500);
+  std::set<std::string> groups;
+  for (const pb::SceneObject& o : scene.objects()) groups.insert(o.group());
+  EXPECT_EQ(groups, (std::set<std::string>{"even", "odd"}));
 }
 
 }  // namespace
