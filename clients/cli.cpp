@@ -11,6 +11,7 @@
 //   gatekeeper-cli put-model ID FILE.toml
 //   gatekeeper-cli create-scene NAME | scene SCENE_ID | delete-object SCENE_ID OBJECT_ID
 //   gatekeeper-cli put-object '{"sceneId": "...", "object": {"partId": "...", "pose": {...}}}'
+//   gatekeeper-cli put-objects '{"sceneId": "...", "objects": [{"partId": "...", "group": "cell 1"}, ...]}'
 //   gatekeeper-cli move-object '{"sceneId": "...", "objectId": "...", "pose": {...}}'
 //   gatekeeper-cli drag < moves.jsonl                (one MoveObjectRequest JSON per line)
 //   gatekeeper-cli start-audit '{"sceneId": "...", "clearanceMm": 10, "rules": [...]}' | watch-audit JOB | cancel-audit JOB
@@ -109,6 +110,8 @@ int main(int argc, char** argv) {
   scene->add_option("id", id)->required();
   auto* put_object = app.add_subcommand("put-object", "PutObjectRequest JSON");
   put_object->add_option("json", json)->required();
+  auto* put_objects = app.add_subcommand("put-objects", "PutObjectsRequest JSON (a batch, all or nothing)");
+  put_objects->add_option("json", json)->required();
   auto* move_object = app.add_subcommand("move-object", "MoveObjectRequest JSON");
   move_object->add_option("json", json)->required();
   auto* drag = app.add_subcommand("drag", "MoveObjectRequest JSON lines on stdin, each answered");
@@ -205,6 +208,12 @@ int main(int argc, char** argv) {
     if (!parse(json, &request)) return 2;
     pb::MoveResult reply;
     return print_reply(stub->PutObject(&ctx, request, &reply), reply);
+  }
+  if (*put_objects) {
+    pb::PutObjectsRequest request;
+    if (!parse(json, &request)) return 2;
+    pb::PutObjectsResponse reply;
+    return print_reply(stub->PutObjects(&ctx, request, &reply), reply);
   }
   if (*move_object) {
     pb::MoveObjectRequest request;
