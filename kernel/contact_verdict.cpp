@@ -127,6 +127,7 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
       }
     }
     out.contacts = std::move(col.contacts);
+    out.contacts_truncated = col.truncated;
     if (out.crossing_pairs > 0) {
       out.verdict = Verdict::kCollision;
       out.reason = oriented ? std::to_string(out.crossing_pairs) + " triangle pairs cross"

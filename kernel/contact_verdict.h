@@ -49,6 +49,7 @@ struct VerdictResult {
   std::vector<Contact> contacts;
   std::size_t crossing_pairs = 0;
   int first_crossing = -1;  // index in contacts of the first crossing pair (COLLISION by crossing)
+  bool contacts_truncated = false;  // max_contacts was reached (INCONCLUSIVE if none of them crossed)
   QueryStats stats;
 };
 

@@ -8,9 +8,12 @@ namespace {
 
 // Statics wider than this many cells on some axis are kept in a short list, not the grid.
 constexpr double kMaxCellsPerAxis = 4.0;
-// A frame reports where two objects touch, not every crossing triangle pair: a few dozen contacts
-// locate it, and collecting thousands would cost a deep overlap milliseconds.
-constexpr std::size_t kContactsPerPair = 32;
+// A frame reports where two objects touch, not every crossing triangle pair: the first few
+// contacts locate it (collecting thousands would cost a deep overlap milliseconds). Only when
+// none of them crosses is the pair looked at again with all its contacts, to tell a touch from a
+// collision.
+constexpr std::size_t kFirstContacts = 32;
+constexpr std::size_t kAllContacts = 10000;
 
 std::uint64_t cell_key(std::int64_t x, std::int64_t y, std::int64_t z) {
   return static_cast<std::uint64_t>(x) * 73856093ULL ^ static_cast<std::uint64_t>(y) * 19349663ULL ^
@@ -178,10 +181,15 @@ Result<FrameAnswer> LayoutSession::move_to(const RigidTransform& pose) {
     }
     ++out.exact_checks;
     VerdictOptions options;
-    options.max_contacts = kContactsPerPair;
+    options.max_contacts = kFirstContacts;
     options.distance_upper_bound_mm = clearance_mm_;
     auto v = assess(*self.mesh, pose, *other.mesh, other.pose, options);
     if (!v.ok()) return v.error();
+    if (v.value().contacts_truncated && v.value().first_crossing < 0) {
+      options.max_contacts = kAllContacts;
+      v = assess(*self.mesh, pose, *other.mesh, other.pose, options);
+      if (!v.ok()) return v.error();
+    }
     const VerdictResult& r = v.value();
     if (r.first_crossing >= 0)
       crossing_[id] = {r.contacts[r.first_crossing].triangle_a, r.contacts[r.first_crossing].triangle_b};
