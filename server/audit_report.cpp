@@ -28,7 +28,30 @@ void add_groups(const std::map<std::string, Count>& counts, google::protobuf::Re
   }
 }
 
+pb::AuditState audit_state(AuditStatus s) {
+  switch (s) {
+    case AuditStatus::kRunning: return pb::RUNNING;
+    case AuditStatus::kDone: return pb::DONE;
+    case AuditStatus::kCancelled: return pb::CANCELLED;
+    case AuditStatus::kFailed: return pb::FAILED;
+  }
+  return pb::FAILED;
+}
+
 }  // namespace
+
+void progress_to_proto(const std::string& job_id, const AuditSnapshot& s, pb::AuditProgress* out) {
+  out->set_job_id(job_id);
+  out->set_state(audit_state(s.status));
+  out->set_pairs_total(s.pairs_total);
+  out->set_pairs_done(s.pairs_done);
+  out->set_clashes(s.clashes.size());
+  out->set_elapsed_s(s.elapsed_s);
+  out->set_eta_s(s.eta_s);
+  out->set_message(s.message);
+  out->set_tiles_total(s.tiles_total);
+  out->set_tiles_done(s.tiles_done);
+}
 
 Result<AuditOptions> to_audit_options(const pb::StartAuditRequest& in, int default_threads) {
   AuditOptions out;
@@ -101,6 +124,46 @@ void report_to_proto(const AuditSnapshot& snapshot, pb::AuditReport* out) {
   out->set_broad_s(snapshot.broad_s);
   out->set_narrow_s(snapshot.narrow_s);
   out->set_recomputed_pairs(snapshot.pairs_done);
+}
+
+AuditSnapshot snapshot_from_report(const pb::AuditReport& report) {
+  AuditSnapshot s;
+  const pb::AuditProgress& p = report.progress();
+  switch (p.state()) {
+    case pb::DONE: s.status = AuditStatus::kDone; break;
+    case pb::CANCELLED: s.status = AuditStatus::kCancelled; break;
+    case pb::RUNNING: s.status = AuditStatus::kFailed; break;  // it was running when the daemon stopped
+    default: s.status = AuditStatus::kFailed;
+  }
+  s.tiles_total = p.tiles_total();
+  s.tiles_done = p.tiles_done();
+  s.pairs_total = p.pairs_total();
+  s.pairs_done = p.pairs_done();
+  s.elapsed_s = p.elapsed_s();
+  s.message = p.message();
+  s.candidate_pairs = report.candidate_pairs();
+  s.excluded_by_rules = report.excluded_by_rules();
+  s.objects = report.objects();
+  s.triangles = report.triangles();
+  s.broad_s = report.broad_s();
+  s.narrow_s = report.narrow_s();
+  auto vec = [](const pb::Vec3& v) { return Vec3(v.x_mm(), v.y_mm(), v.z_mm()); };
+  for (const pb::Clash& c : report.clashes()) {
+    ClashRecord r{c.object_a(), c.object_b(), c.name_a(), c.name_b(), c.category_a(), c.category_b(), {}};
+    r.clash.verdict = from_proto(c.verdict());
+    r.clash.distance_mm = c.distance_mm();
+    r.clash.clearance_violation = c.clearance_violation();
+    r.clash.point_a = vec(c.point());
+    r.clash.point_b = vec(c.point_b());
+    r.clash.contacts = c.contact_pairs();
+    r.clash.depth_mm = c.depth_mm();
+    r.clash.depth_direction = vec(c.depth_direction());
+    r.clash.volume_mm3 = c.volume_mm3();
+    for (const pb::ClashRegion& q : c.regions())
+      r.clash.regions.push_back({vec(q.point()), Aabb{vec(q.bounds_min()), vec(q.bounds_max())}, q.contact_pairs(), q.min_distance_mm()});
+    s.clashes.push_back(std::move(r));
+  }
+  return s;
 }
 
 }  // namespace gk::server

@@ -179,4 +179,54 @@ void to_proto(const p4::StepAnswer& a, pb::ValidateStepResponse* out) {
   t->set_total_us(a.times.total_us);
 }
 
+Result<StoredPose> to_stored_pose(const pb::Pose& in, const std::string& field) {
+  auto checked = to_pose(in, field);  // validates finiteness and the axis
+  if (!checked.ok()) return checked.error();
+  StoredPose p;
+  p.translation = Vec3(in.translation().x_mm(), in.translation().y_mm(), in.translation().z_mm());
+  if (in.rotation_deg() != 0.0) {
+    p.axis = Vec3(in.rotation_axis().x_mm(), in.rotation_axis().y_mm(), in.rotation_axis().z_mm());
+    p.angle_deg = in.rotation_deg();
+  }
+  return p;
+}
+
+void scene_to_proto(const SceneRecord& scene, pb::SceneInfo* out) {
+  out->set_scene_id(scene.id);
+  out->set_name(scene.name);
+  for (const auto& [id, o] : scene.objects) {
+    pb::SceneObject* p = out->add_objects();
+    p->set_object_id(o.id);
+    p->set_name(o.name);
+    p->set_category(o.category);
+    p->set_part_id(o.part_id);
+    p->set_group(o.group);
+    to_proto(o.pose.translation, p->mutable_pose()->mutable_translation());
+    to_proto(o.pose.axis, p->mutable_pose()->mutable_rotation_axis());
+    p->mutable_pose()->set_rotation_deg(o.pose.angle_deg);
+  }
+}
+
+Result<SceneRecord> scene_from_proto(const pb::SceneInfo& in) {
+  SceneRecord out;
+  out.id = in.scene_id();
+  out.name = in.name();
+  for (int i = 0; i < in.objects_size(); ++i) {
+    const pb::SceneObject& o = in.objects(i);
+    auto pose = to_stored_pose(o.pose(), "objects[" + std::to_string(i) + "].pose");
+    if (!pose.ok()) return pose.error();
+    out.objects[o.object_id()] = {o.object_id(), o.name(), o.category(), o.part_id(), pose.value(), o.group()};
+  }
+  return out;
+}
+
+Verdict from_proto(pb::Verdict v) {
+  switch (v) {
+    case pb::CLEAR: return Verdict::kClear;
+    case pb::TOUCHING: return Verdict::kTouching;
+    case pb::COLLISION: return Verdict::kCollision;
+    default: return Verdict::kInconclusive;
+  }
+}
+
 }  // namespace gk::server

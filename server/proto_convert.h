@@ -6,6 +6,7 @@
 #include "kernel/contact_verdict.h"
 #include "machine_models/p4/step_validator.h"
 #include "server/part_registry.h"
+#include "server/scene_store.h"
 
 #include <grpcpp/support/status.h>
 
@@ -25,5 +26,11 @@ void to_proto(const p4::MachineState& state, pb::MachineState* out);
 void to_proto(const Vec3& v, pb::Vec3* out);
 void to_proto(const PartRecord& record, pb::PartInfo* out);
 pb::Verdict to_proto(Verdict v);
+Verdict from_proto(pb::Verdict v);
+
+// Scenes: a pose as stored (axis and angle kept as given), and a scene both ways.
+Result<StoredPose> to_stored_pose(const pb::Pose& in, const std::string& field);
+void scene_to_proto(const SceneRecord& scene, pb::SceneInfo* out);
+Result<SceneRecord> scene_from_proto(const pb::SceneInfo& in);
 
 }  // namespace gk::server

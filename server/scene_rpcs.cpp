@@ -13,57 +13,6 @@
 namespace gk::server {
 namespace {
 
-Result<StoredPose> to_stored_pose(const pb::Pose& in, const std::string& field) {
-  auto checked = to_pose(in, field);  // validates finiteness and the axis
-  if (!checked.ok()) return checked.error();
-  StoredPose p;
-  p.translation = Vec3(in.translation().x_mm(), in.translation().y_mm(), in.translation().z_mm());
-  if (in.rotation_deg() != 0.0) {
-    p.axis = Vec3(in.rotation_axis().x_mm(), in.rotation_axis().y_mm(), in.rotation_axis().z_mm());
-    p.angle_deg = in.rotation_deg();
-  }
-  return p;
-}
-
-void scene_to_proto(const SceneRecord& scene, pb::SceneInfo* out) {
-  out->set_scene_id(scene.id);
-  out->set_name(scene.name);
-  for (const auto& [id, o] : scene.objects) {
-    pb::SceneObject* p = out->add_objects();
-    p->set_object_id(o.id);
-    p->set_name(o.name);
-    p->set_category(o.category);
-    p->set_part_id(o.part_id);
-    p->set_group(o.group);
-    to_proto(o.pose.translation, p->mutable_pose()->mutable_translation());
-    to_proto(o.pose.axis, p->mutable_pose()->mutable_rotation_axis());
-    p->mutable_pose()->set_rotation_deg(o.pose.angle_deg);
-  }
-}
-
-pb::AuditState audit_state(AuditStatus s) {
-  switch (s) {
-    case AuditStatus::kRunning: return pb::RUNNING;
-    case AuditStatus::kDone: return pb::DONE;
-    case AuditStatus::kCancelled: return pb::CANCELLED;
-    case AuditStatus::kFailed: return pb::FAILED;
-  }
-  return pb::FAILED;
-}
-
-void progress_to_proto(const std::string& job_id, const AuditSnapshot& s, pb::AuditProgress* out) {
-  out->set_job_id(job_id);
-  out->set_state(audit_state(s.status));
-  out->set_pairs_total(s.pairs_total);
-  out->set_pairs_done(s.pairs_done);
-  out->set_clashes(s.clashes.size());
-  out->set_elapsed_s(s.elapsed_s);
-  out->set_eta_s(s.eta_s);
-  out->set_message(s.message);
-  out->set_tiles_total(s.tiles_total);
-  out->set_tiles_done(s.tiles_done);
-}
-
 // The drag stream: each move is stored and answered with its contacts before the next is read.
 class DragReactor final : public grpc::ServerBidiReactor<pb::MoveObjectRequest, pb::MoveResult> {
  public:
