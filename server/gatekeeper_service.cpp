@@ -93,8 +93,13 @@ class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> 
 
 }  // namespace
 
-GatekeeperService::GatekeeperService(MachineRegistry& machines, PartRegistry& parts, SceneStore& scenes, ServiceOptions options)
-    : machines_(machines), parts_(parts), scenes_(scenes), options_(options), pool_(options.workers, options.max_queued) {}
+GatekeeperService::GatekeeperService(MachineRegistry& machines, PartRegistry& parts, SceneStore& scenes, AuditArchive* archive,
+                                     ServiceOptions options)
+    : machines_(machines), parts_(parts), scenes_(scenes), archive_(archive), options_(options),
+      pool_(options.workers, options.max_queued) {
+  if (archive_)
+    for (auto& [id, job] : archive_->load_all()) audits_.restore(id, std::move(job));
+}
 
 GatekeeperService::~GatekeeperService() { pool_.stop(); }
 

@@ -5,6 +5,7 @@
 
 #include "gatekeeper/v1/gatekeeper.grpc.pb.h"
 #include "server/answer_cache.h"
+#include "server/audit_archive.h"
 #include "server/machine_registry.h"
 #include "server/part_registry.h"
 #include "server/rpc_stats.h"
@@ -28,7 +29,9 @@ struct ServiceOptions {
 
 class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackService {
  public:
-  GatekeeperService(MachineRegistry& machines, PartRegistry& parts, SceneStore& scenes, ServiceOptions options);
+  // archive: where ended audits are kept (and were restored from); may be null.
+  GatekeeperService(MachineRegistry& machines, PartRegistry& parts, SceneStore& scenes, AuditArchive* archive,
+                    ServiceOptions options);
   ~GatekeeperService() override;
 
   void stop_work() { pool_.stop(); }
@@ -95,6 +98,7 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
   PartRegistry& parts_;
   SceneStore& scenes_;
   AuditJobs audits_;
+  AuditArchive* archive_;
   AnswerCache answers_;
   ServiceOptions options_;
   RpcStats stats_;

@@ -93,7 +93,12 @@ int main(int argc, char** argv) {
     spdlog::error("{}", scenes.error().to_string());
     return 1;
   }
-  gk::server::GatekeeperService service(*machines.value(), parts, *scenes.value(), options);
+  auto archive = gk::server::AuditArchive::open(config.data_dir);
+  if (!archive.ok()) {
+    spdlog::error("{}", archive.error().to_string());
+    return 1;
+  }
+  gk::server::GatekeeperService service(*machines.value(), parts, *scenes.value(), archive.value().get(), options);
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();

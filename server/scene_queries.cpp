@@ -1,6 +1,7 @@
 #include "server/scene_queries.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <cmath>
 #include <functional>
 #include <map>
@@ -108,8 +109,18 @@ void AuditJob::update(const std::function<void(AuditSnapshot&)>& change) {
   changed_.notify_all();
 }
 
+void AuditJob::end(const std::function<void(AuditSnapshot&)>& change) {
+  AuditSnapshot final_state = snapshot();
+  change(final_state);
+  final_state.eta_s = 0.0;
+  final_state.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
+  // Kept (archived) before anybody can see that the job has ended.
+  if (on_end_) on_end_(final_state);
+  update([&](AuditSnapshot& s) { s = std::move(final_state); });
+}
+
 void AuditJob::fail(const Error& error) {
-  update([&](AuditSnapshot& s) {
+  end([&](AuditSnapshot& s) {
     s.status = AuditStatus::kFailed;
     s.message = error.to_string();
   });
@@ -120,7 +131,8 @@ std::vector<AuditedObject> AuditJob::objects() const {
   return objects_;
 }
 
-void AuditJob::run(PartRegistry& parts) {
+void AuditJob::run(PartRegistry& parts, std::function<void(const AuditSnapshot&)> on_end) {
+  on_end_ = std::move(on_end);
   // The scene's objects in id order; one mesh and BVH per part, shared by every copy.
   auto placed = place_scene(scene_, parts);
   if (!placed.ok()) return fail(placed.error());
@@ -188,7 +200,7 @@ void AuditJob::run(PartRegistry& parts) {
   const AuditResult& r = result.value();
   std::vector<ClashRecord> ordered;
   for (const PairClash& c : r.clashes) ordered.push_back(to_record(c));
-  update([&](AuditSnapshot& s) {
+  end([&](AuditSnapshot& s) {
     s.clashes = std::move(ordered);
     s.pairs_done = r.pairs_done;
     s.candidate_pairs = r.candidate_pairs;
@@ -197,7 +209,6 @@ void AuditJob::run(PartRegistry& parts) {
     s.triangles = r.triangles;
     s.broad_s = r.times.broad_s;
     s.narrow_s = r.times.narrow_s;
-    s.eta_s = 0.0;
     s.status = r.cancelled ? AuditStatus::kCancelled : AuditStatus::kDone;
     s.message = r.cancelled ? "cancelled; the clashes of the pairs finished are kept" : "";
   });
@@ -213,6 +224,28 @@ AuditSnapshot AuditJob::wait_for_change(unsigned long long seen_done, AuditStatu
   std::unique_lock<std::mutex> lock(mutex_);
   changed_.wait_for(lock, timeout, [&] { return state_.pairs_done != seen_done || state_.status != seen_status; });
   return state_;
+}
+
+std::shared_ptr<AuditJob> AuditJob::restored(SceneRecord scene, AuditSnapshot snapshot, std::vector<AuditedObject> objects) {
+  auto job = std::make_shared<AuditJob>(std::move(scene), AuditOptions{});
+  job->state_ = std::move(snapshot);
+  job->objects_ = std::move(objects);
+  return job;
+}
+
+void AuditJobs::restore(const std::string& id, std::shared_ptr<AuditJob> job) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  jobs_[id] = std::move(job);
+  const std::string prefix = "audit-";
+  if (id.compare(0, prefix.size(), prefix) == 0) {
+    const unsigned long long n = std::strtoull(id.c_str() + prefix.size(), nullptr, 10);
+    counter_ = std::max(counter_, n);
+  }
+}
+
+void AuditJobs::remove(const std::string& id) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  jobs_.erase(id);
 }
 
 std::string AuditJobs::add(std::shared_ptr<AuditJob> job) {

@@ -102,7 +102,10 @@ class AuditJob {
   // cancellation flag and progress reporting.
   AuditJob(SceneRecord scene, AuditOptions options, std::shared_ptr<const AuditJob> baseline = nullptr)
       : scene_(std::move(scene)), options_(std::move(options)), baseline_(std::move(baseline)) {}
-  void run(PartRegistry& parts);
+  // A job that ended before the daemon restarted, as the archive kept it.
+  static std::shared_ptr<AuditJob> restored(SceneRecord scene, AuditSnapshot snapshot, std::vector<AuditedObject> objects);
+  // on_end sees the final state before it is published (the daemon archives it there).
+  void run(PartRegistry& parts, std::function<void(const AuditSnapshot&)> on_end = {});
   void cancel() { cancelled_ = true; }
   AuditSnapshot snapshot() const;
   // Waits until the progress changes (or timeout); returns the snapshot.
@@ -113,6 +116,8 @@ class AuditJob {
  private:
   void update(const std::function<void(AuditSnapshot&)>& change);
   void fail(const Error& error);
+  void end(const std::function<void(AuditSnapshot&)>& change);
+  std::function<void(const AuditSnapshot&)> on_end_;
   SceneRecord scene_;
   AuditOptions options_;
   std::shared_ptr<const AuditJob> baseline_;
@@ -127,6 +132,9 @@ class AuditJob {
 class AuditJobs {
  public:
   std::string add(std::shared_ptr<AuditJob> job);
+  // A job restored from the archive under its old id; new ids continue after the largest.
+  void restore(const std::string& id, std::shared_ptr<AuditJob> job);
+  void remove(const std::string& id);
   Result<std::shared_ptr<AuditJob>> get(const std::string& id) const;
 
  private:

@@ -6,6 +6,8 @@
 #include "server/proto_convert.h"
 #include "server/rpc_helpers.h"
 
+#include <spdlog/spdlog.h>
+
 #include <cmath>
 #include <set>
 #include <thread>
@@ -217,10 +219,20 @@ grpc::ServerUnaryReactor* GatekeeperService::StartAudit(grpc::CallbackServerCont
     baseline = base.value();
   }
   auto job = std::make_shared<AuditJob>(scene.value(), checked.value(), baseline);
+  const std::string id = audits_.add(job);
   PartRegistry* parts = &parts_;
-  if (!pool_.try_submit([job, parts] { job->run(*parts); }))
+  AuditArchive* archive = archive_;
+  if (!pool_.try_submit([job, id, parts, archive] {
+        job->run(*parts, [&](const AuditSnapshot& final_state) {
+          if (!archive) return;
+          auto saved = archive->save(id, *job, final_state);
+          if (!saved.ok()) spdlog::warn("audit {} not archived: {}", id, saved.error().to_string());
+        });
+      })) {
+    audits_.remove(id);
     return finish(ctx, stats_, "StartAudit", t0, {grpc::StatusCode::RESOURCE_EXHAUSTED, "audit queue full: retry later"});
-  response->set_job_id(audits_.add(job));
+  }
+  response->set_job_id(id);
   return finish(ctx, stats_, "StartAudit", t0, grpc::Status::OK);
 }
 

@@ -381,5 +381,69 @@ TEST(AuditE2E, PutObjectsStoresAWholeBatchOrNothingAndItSurvivesKill9) {
   EXPECT_EQ(groups, (std::set<std::string>{"even", "odd"}));
 }
 
+TEST(AuditE2E, EndedAuditsSurviveKill9AndStayUsableAsBaselines) {
+  const std::string dir = testing::temp_dir("audit-archive");
+  std::string scene_id, job_id, crate_b;
+  std::map<std::pair<std::string, std::string>, pb::Verdict> before;
+  pb::StartAuditRequest start;
+  {
+    Daemon daemon(dir);
+    auto stub = daemon.stub();
+    const std::string crate = upload(*stub, box_obj(1000, 1000, 1000), "obj");
+    grpc::ClientContext cctx;
+    pb::SceneInfo scene;
+    ASSERT_TRUE(stub->CreateScene(&cctx, pb::CreateSceneRequest(), &scene).ok());
+    scene_id = scene.scene_id();
+    pb::PutObjectsRequest batch;
+    batch.set_scene_id(scene_id);
+    for (int i = 0; i < 6; ++i) {
+      pb::SceneObject* o = batch.add_objects();
+      o->set_name("crate" + std::to_string(i));
+      o->set_category("crate");
+      o->set_part_id(crate);
+      *o->mutable_pose() = pose_of({"", "", "", "", Vec3(995.0 * i, 0, 0)});  // each overlaps the next by 5 mm
+    }
+    pb::PutObjectsResponse ids;
+    grpc::ClientContext pctx;
+    ASSERT_TRUE(stub->PutObjects(&pctx, batch, &ids).ok());
+    crate_b = ids.object_ids(1);
+    start.set_scene_id(scene_id);
+    start.set_clearance_mm(1.0);
+    const pb::AuditReport report = run_audit(*stub, start);
+    ASSERT_EQ(report.progress().state(), pb::DONE);
+    job_id = report.progress().job_id();
+    before = clash_set(report);
+    ASSERT_EQ(before.size(), 5u);
+    EXPECT_EQ(daemon.stop(SIGKILL), -SIGKILL);
+  }
+  Daemon daemon(dir);
+  auto stub = daemon.stub();
+  grpc::ClientContext rctx;
+  pb::GetAuditReportRequest get;
+  get.set_job_id(job_id);
+  get.set_html(true);
+  pb::AuditReport kept;
+  ASSERT_TRUE(stub->GetAuditReport(&rctx, get, &kept).ok());
+  EXPECT_EQ(kept.progress().state(), pb::DONE);
+  EXPECT_EQ(clash_set(kept), before);
+  EXPECT_NE(kept.html().find("crate3"), std::string::npos);
+  // The kept job is a baseline: move crate1 away, re-audit against it, compare with a fresh audit.
+  grpc::ClientContext mctx;
+  pb::MoveObjectRequest move;
+  move.set_scene_id(scene_id);
+  move.set_object_id(crate_b);
+  *move.mutable_pose() = pose_of({"", "", "", "", Vec3(995.0, 5000, 0)});
+  pb::MoveResult moved;
+  ASSERT_TRUE(stub->MoveObject(&mctx, move, &moved).ok());
+  pb::StartAuditRequest again = start;
+  again.set_baseline_job_id(job_id);
+  const pb::AuditReport incremental = run_audit(*stub, again);
+  const pb::AuditReport fresh = run_audit(*stub, start);
+  EXPECT_EQ(clash_set(incremental), clash_set(fresh));
+  EXPECT_EQ(clash_set(fresh).size(), 3u);
+  EXPECT_NE(incremental.progress().job_id(), job_id);  // new ids continue after the kept ones
+  EXPECT_NE(fresh.progress().job_id(), job_id);
+}
+
 }  // namespace
 }  // namespace gk

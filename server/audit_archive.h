@@ -1,0 +1,32 @@
+// Finished audit jobs kept in the daemon's SQLite database (beside parts and scenes), so their
+// reports, pages and re-audit baselines survive a restart. A job still running when the daemon
+// stops is not kept.
+#pragma once
+
+#include "server/scene_queries.h"
+
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+struct sqlite3;
+
+namespace gk::server {
+
+class AuditArchive {
+ public:
+  static Result<std::unique_ptr<AuditArchive>> open(const std::string& directory);
+  ~AuditArchive();
+
+  // Stores the job with its final state.
+  Result<bool> save(const std::string& job_id, const AuditJob& job, const AuditSnapshot& final_state);
+  // Every stored job, ended, in id order; entries that cannot be read are skipped and counted.
+  std::vector<std::pair<std::string, std::shared_ptr<AuditJob>>> load_all(std::size_t* unreadable = nullptr) const;
+
+ private:
+  AuditArchive() = default;
+  sqlite3* db_ = nullptr;
+};
+
+}  // namespace gk::server
