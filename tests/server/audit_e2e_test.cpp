@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <algorithm>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <regex>
 #include <set>
@@ -75,6 +76,39 @@ pb::AuditReport run_audit(pb::Gatekeeper::Stub& stub, const pb::StartAuditReques
   pb::AuditReport report;
   EXPECT_TRUE(stub.GetAuditReport(&rctx, get, &report).ok());
   return report;
+}
+
+// A new scene with `count` copies of a 1 m cube (part uploaded), placed by where(i), in one batch
+// request (returned, not sent) so a test can also send broken copies of it.
+struct CubeScene {
+  std::string scene_id, cube;
+  pb::PutObjectsRequest batch;
+};
+CubeScene cube_scene(pb::Gatekeeper::Stub& stub, const std::string& prefix, int count, const std::function<Vec3(int)>& where) {
+  CubeScene out;
+  out.cube = upload(stub, box_obj(1000, 1000, 1000), "obj");
+  grpc::ClientContext cctx;
+  pb::SceneInfo scene;
+  EXPECT_TRUE(stub.CreateScene(&cctx, pb::CreateSceneRequest(), &scene).ok());
+  out.scene_id = scene.scene_id();
+  out.batch.set_scene_id(out.scene_id);
+  for (int i = 0; i < count; ++i) {
+    pb::SceneObject* o = out.batch.add_objects();
+    o->set_name(prefix + std::to_string(i));
+    o->set_category(prefix);
+    o->set_part_id(out.cube);
+    *o->mutable_pose() = pose_of({"", "", "", "", where(i)});
+  }
+  return out;
+}
+
+pb::SceneInfo get_scene(pb::Gatekeeper::Stub& stub, const std::string& scene_id) {
+  grpc::ClientContext ctx;
+  pb::GetSceneRequest get;
+  get.set_scene_id(scene_id);
+  pb::SceneInfo scene;
+  EXPECT_TRUE(stub.GetScene(&ctx, get, &scene).ok());
+  return scene;
 }
 
 std::map<std::pair<std::string, std::string>, pb::Verdict> clash_set(const pb::AuditReport& report) {
@@ -331,21 +365,10 @@ TEST(AuditE2E, PutObjectsStoresAWholeBatchOrNothingAndItSurvivesKill9) {
   {
     Daemon daemon(dir);
     auto stub = daemon.stub();
-    const std::string cube = upload(*stub, box_obj(1000, 1000, 1000), "obj");
-    grpc::ClientContext cctx;
-    pb::SceneInfo scene;
-    ASSERT_TRUE(stub->CreateScene(&cctx, pb::CreateSceneRequest(), &scene).ok());
-    scene_id = scene.scene_id();
-    pb::PutObjectsRequest batch;
-    batch.set_scene_id(scene_id);
-    for (int i = 0; i < 500; ++i) {
-      pb::SceneObject* o = batch.add_objects();
-      o->set_name("cube" + std::to_string(i));
-      o->set_category("cube");
-      o->set_group(i % 2 ? "odd" : "even");
-      o->set_part_id(cube);
-      *o->mutable_pose() = pose_of({"", "", "", "", Vec3(2000.0 * (i % 25), 2000.0 * (i / 25), 0)});
-    }
+    CubeScene made = cube_scene(*stub, "cube", 500, [](int i) { return Vec3(2000.0 * (i % 25), 2000.0 * (i / 25), 0); });
+    scene_id = made.scene_id;
+    pb::PutObjectsRequest& batch = made.batch;
+    for (int i = 0; i < 500; ++i) batch.mutable_objects(i)->set_group(i % 2 ? "odd" : "even");
     // One bad object: nothing of the batch is stored, and the error names it.
     pb::PutObjectsRequest bad = batch;
     bad.mutable_objects(321)->mutable_pose()->mutable_translation()->set_z_mm(std::nan(""));
@@ -358,11 +381,7 @@ TEST(AuditE2E, PutObjectsStoresAWholeBatchOrNothingAndItSurvivesKill9) {
     bad.mutable_objects(7)->set_part_id(std::string(64, 'f'));
     grpc::ClientContext b2;
     EXPECT_EQ(stub->PutObjects(&b2, bad, &ids).error_code(), grpc::StatusCode::NOT_FOUND);
-    grpc::ClientContext gctx;
-    pb::GetSceneRequest get;
-    get.set_scene_id(scene_id);
-    ASSERT_TRUE(stub->GetScene(&gctx, get, &scene).ok());
-    EXPECT_EQ(scene.objects_size(), 0);
+    EXPECT_EQ(get_scene(*stub, scene_id).objects_size(), 0);
     grpc::ClientContext pctx;
     ASSERT_TRUE(stub->PutObjects(&pctx, batch, &ids).ok());
     EXPECT_EQ(ids.object_ids_size(), 500);
@@ -370,11 +389,7 @@ TEST(AuditE2E, PutObjectsStoresAWholeBatchOrNothingAndItSurvivesKill9) {
   }
   Daemon daemon(dir);
   auto stub = daemon.stub();
-  grpc::ClientContext gctx;
-  pb::GetSceneRequest get;
-  get.set_scene_id(scene_id);
-  pb::SceneInfo scene;
-  ASSERT_TRUE(stub->GetScene(&gctx, get, &scene).ok());
+  const pb::SceneInfo scene = get_scene(*stub, scene_id);
   ASSERT_EQ(scene.objects_size(), 500);
   std::set<std::string> groups;
   for (const pb::SceneObject& o : scene.objects()) groups.insert(o.group());
@@ -389,20 +404,10 @@ TEST(AuditE2E, EndedAuditsSurviveKill9AndStayUsableAsBaselines) {
   {
     Daemon daemon(dir);
     auto stub = daemon.stub();
-    const std::string crate = upload(*stub, box_obj(1000, 1000, 1000), "obj");
-    grpc::ClientContext cctx;
-    pb::SceneInfo scene;
-    ASSERT_TRUE(stub->CreateScene(&cctx, pb::CreateSceneRequest(), &scene).ok());
-    scene_id = scene.scene_id();
-    pb::PutObjectsRequest batch;
-    batch.set_scene_id(scene_id);
-    for (int i = 0; i < 6; ++i) {
-      pb::SceneObject* o = batch.add_objects();
-      o->set_name("crate" + std::to_string(i));
-      o->set_category("crate");
-      o->set_part_id(crate);
-      *o->mutable_pose() = pose_of({"", "", "", "", Vec3(995.0 * i, 0, 0)});  // each overlaps the next by 5 mm
-    }
+    // Crates in a row, each overlapping the next by 5 mm.
+    const CubeScene made = cube_scene(*stub, "crate", 6, [](int i) { return Vec3(995.0 * i, 0, 0); });
+    scene_id = made.scene_id;
+    const pb::PutObjectsRequest& batch = made.batch;
     pb::PutObjectsResponse ids;
     grpc::ClientContext pctx;
     ASSERT_TRUE(stub->PutObjects(&pctx, batch, &ids).ok());
