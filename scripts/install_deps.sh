@@ -9,7 +9,7 @@ PACKAGES=(
   # geometry: OpenCASCADE 7.6.3 and Eigen
   libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev
   libocct-data-exchange-dev libocct-visualization-dev libocct-ocaf-dev
-  libeigen3-dev libtbb-dev
+  libeigen3-dev
   # mesh files (STL, OBJ, OFF, PLY, glTF)
   libassimp-dev
   # peers and test/benchmark frameworks
