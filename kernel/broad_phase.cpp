@@ -1,15 +1,12 @@
 #include "kernel/broad_phase.h"
 
+#include "kernel/uniform_grid.h"
+
 #include <algorithm>
 #include <cmath>
-#include <numeric>
-#include <unordered_map>
 
 namespace gk {
 namespace {
-
-// Boxes wider than this many cells on some axis are swept apart from the grid.
-constexpr double kMaxCellsPerAxis = 4.0;
 
 std::vector<Aabb> grown(const std::vector<Aabb>& boxes, double margin_mm) {
   std::vector<Aabb> out;
@@ -71,63 +68,31 @@ std::vector<IndexPair> sweep_and_prune(const std::vector<Aabb>& boxes, double ma
 
 std::vector<IndexPair> hash_grid_pairs(const std::vector<Aabb>& boxes, double margin_mm, HashGridStats* stats) {
   const std::vector<Aabb> g = grown(boxes, margin_mm);
-  std::vector<double> diagonals;
-  for (const Aabb& b : g)
-    if (!b.empty()) diagonals.push_back(b.diagonal().norm());
+  const UniformGrid grid(g, 1e-6);
   std::vector<IndexPair> out;
-  if (diagonals.empty()) return out;
-  std::nth_element(diagonals.begin(), diagonals.begin() + static_cast<std::ptrdiff_t>(diagonals.size() / 2), diagonals.end());
-  const double cell = std::max(2.0 * diagonals[diagonals.size() / 2], 1e-6);
-  auto cell_of = [cell](double x) { return static_cast<std::int64_t>(std::floor(x / cell)); };
-  struct Key {
-    std::int64_t x, y, z;
-    bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
-  };
-  struct KeyHash {
-    std::size_t operator()(const Key& k) const {
-      // Unsigned arithmetic: wrapping is defined.
-      return static_cast<std::size_t>(static_cast<std::uint64_t>(k.x) * 73856093ULL ^ static_cast<std::uint64_t>(k.y) * 19349663ULL ^
-                                      static_cast<std::uint64_t>(k.z) * 83492791ULL);
-    }
-  };
-  std::unordered_map<Key, std::vector<std::uint32_t>, KeyHash> cells;
-  std::vector<std::uint32_t> oversized, all;
-  std::size_t entries = 0;
-  for (std::uint32_t i = 0; i < g.size(); ++i) {
-    if (g[i].empty()) continue;
-    all.push_back(i);
-    if ((g[i].diagonal().array() > kMaxCellsPerAxis * cell).any()) {
-      oversized.push_back(i);
-      continue;
-    }
-    for (std::int64_t x = cell_of(g[i].min.x()); x <= cell_of(g[i].max.x()); ++x)
-      for (std::int64_t y = cell_of(g[i].min.y()); y <= cell_of(g[i].max.y()); ++y)
-        for (std::int64_t z = cell_of(g[i].min.z()); z <= cell_of(g[i].max.z()); ++z) {
-          cells[{x, y, z}].push_back(i);
-          ++entries;
-        }
-  }
-  for (const auto& [key, members] : cells)
+  for (const auto& [cell, members] : grid.cells())
     for (std::size_t i = 0; i < members.size(); ++i)
       for (std::size_t j = i + 1; j < members.size(); ++j) {
         const Aabb& a = g[members[i]];
         const Aabb& b = g[members[j]];
         if (!a.overlaps(b)) continue;
         // Only the cell holding the low corner of the intersection emits the pair.
-        const Vec3 low = a.min.cwiseMax(b.min);
-        if (cell_of(low.x()) != key.x || cell_of(low.y()) != key.y || cell_of(low.z()) != key.z) continue;
+        if (!(grid_cell_of(a.min.cwiseMax(b.min), grid.cell_mm()) == cell)) continue;
         out.emplace_back(std::min(members[i], members[j]), std::max(members[i], members[j]));
       }
   // Oversized boxes against everything: one sweep over all boxes, keeping pairs with an oversized member.
-  if (!oversized.empty()) {
+  std::vector<std::uint32_t> all;
+  for (std::uint32_t i = 0; i < g.size(); ++i)
+    if (!g[i].empty()) all.push_back(i);
+  if (!grid.oversized().empty()) {
     std::vector<char> is_oversized(g.size(), 0);
-    for (std::uint32_t i : oversized) is_oversized[i] = 1;
+    for (std::uint32_t i : grid.oversized()) is_oversized[i] = 1;
     sweep(g, all, spread_axis(g), [&](std::uint32_t a, std::uint32_t b) {
       if (is_oversized[a] || is_oversized[b]) out.emplace_back(a, b);
     });
   }
   std::sort(out.begin(), out.end());
-  if (stats) *stats = {cell, all.size() - oversized.size(), oversized.size(), entries};
+  if (stats) *stats = {grid.cell_mm(), all.size() - grid.oversized().size(), grid.oversized().size(), grid.entries()};
   return out;
 }
 

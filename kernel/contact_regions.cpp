@@ -1,5 +1,7 @@
 #include "kernel/contact_regions.h"
 
+#include "kernel/uniform_grid.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -32,26 +34,15 @@ std::vector<ContactRegion> group_into_regions(const std::vector<ProximityPair>& 
   }
   // Nearby witnesses, through a hash grid of cell merge_mm: neighbours are in adjacent cells.
   if (merge_mm > 0.0 && std::isfinite(merge_mm)) {
-    auto cell_of = [merge_mm](const Vec3& p) {
-      return Eigen::Vector3i(static_cast<int>(std::floor(p.x() / merge_mm)), static_cast<int>(std::floor(p.y() / merge_mm)),
-                             static_cast<int>(std::floor(p.z() / merge_mm)));
-    };
-    auto key = [](const Eigen::Vector3i& c) {
-      return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.x())) * 73856093ull) ^
-             (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.y())) * 19349663ull) ^
-             (static_cast<std::uint64_t>(static_cast<std::uint32_t>(c.z())) * 83492791ull);
-    };
-    std::unordered_multimap<std::uint64_t, std::size_t> grid;
-    for (std::size_t i = 0; i < pairs.size(); ++i) grid.emplace(key(cell_of(pairs[i].point_a)), i);
+    std::unordered_multimap<GridCell, std::size_t, GridCellHash> grid;
+    for (std::size_t i = 0; i < pairs.size(); ++i) grid.emplace(grid_cell_of(pairs[i].point_a, merge_mm), i);
     for (std::size_t i = 0; i < pairs.size(); ++i) {
-      const Eigen::Vector3i c = cell_of(pairs[i].point_a);
-      for (int dx = -1; dx <= 1; ++dx)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dz = -1; dz <= 1; ++dz) {
-            auto range = grid.equal_range(key(c + Eigen::Vector3i(dx, dy, dz)));
-            for (auto it = range.first; it != range.second; ++it)
-              if ((pairs[it->second].point_a - pairs[i].point_a).norm() <= merge_mm) sets.join(i, it->second);
-          }
+      const GridCell c = grid_cell_of(pairs[i].point_a, merge_mm);
+      UniformGrid::for_each_cell({{c.x - 1, c.y - 1, c.z - 1}, {c.x + 1, c.y + 1, c.z + 1}}, [&](const GridCell& near) {
+        auto range = grid.equal_range(near);
+        for (auto it = range.first; it != range.second; ++it)
+          if ((pairs[it->second].point_a - pairs[i].point_a).norm() <= merge_mm) sets.join(i, it->second);
+      });
     }
   }
   std::unordered_map<std::size_t, std::size_t> region_of_root;

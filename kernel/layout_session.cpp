@@ -6,19 +6,12 @@
 namespace gk {
 namespace {
 
-// Statics wider than this many cells on some axis are kept in a short list, not the grid.
-constexpr double kMaxCellsPerAxis = 4.0;
 // A frame reports where two objects touch, not every crossing triangle pair: the first few
 // contacts locate it (collecting thousands would cost a deep overlap milliseconds). Only when
 // none of them crosses is the pair looked at again with all its contacts, to tell a touch from a
 // collision.
 constexpr std::size_t kFirstContacts = 32;
 constexpr std::size_t kAllContacts = 10000;
-
-std::uint64_t cell_key(std::int64_t x, std::int64_t y, std::int64_t z) {
-  return static_cast<std::uint64_t>(x) * 73856093ULL ^ static_cast<std::uint64_t>(y) * 19349663ULL ^
-         static_cast<std::uint64_t>(z) * 83492791ULL;
-}
 
 OrientedBox obb_of(const MeshBvh& mesh) { return OrientedBox::fit(mesh.mesh().vertices()); }
 
@@ -54,10 +47,6 @@ std::pair<double, Vec3> best_box_axis(const OrientedBox& a, const OrientedBox& b
 
 }  // namespace
 
-bool LayoutSession::CellRange::operator==(const CellRange& o) const {
-  return std::equal(lo, lo + 3, o.lo) && std::equal(hi, hi + 3, o.hi);
-}
-
 Result<std::unique_ptr<LayoutSession>> LayoutSession::create(std::vector<AuditObject> objects, std::uint32_t moving,
                                                              double clearance_mm) {
   if (moving >= objects.size()) return invalid_argument("moving", "no object " + std::to_string(moving));
@@ -77,61 +66,29 @@ Result<std::unique_ptr<LayoutSession>> LayoutSession::create(std::vector<AuditOb
   s->stamp_.assign(n, 0);
   // One oriented box per distinct mesh, placed per object.
   std::unordered_map<const MeshBvh*, OrientedBox> local;
-  std::vector<double> diagonals;
   for (std::size_t i = 0; i < n; ++i) {
     const AuditObject& o = s->objects_[i];
     auto it = local.find(o.mesh.get());
     if (it == local.end()) it = local.emplace(o.mesh.get(), obb_of(*o.mesh)).first;
     s->obbs_[i] = placed(it->second, o.pose);
     s->boxes_[i] = transformed_box(o.mesh->root_bounds(), o.pose).expanded(0.5 * clearance_mm);
-    if (i != moving) diagonals.push_back(s->boxes_[i].diagonal().norm());
   }
   s->moving_local_obb_ = local.at(s->objects_[moving].mesh.get());
-  if (!diagonals.empty()) {
-    std::nth_element(diagonals.begin(), diagonals.begin() + static_cast<std::ptrdiff_t>(diagonals.size() / 2), diagonals.end());
-    s->cell_mm_ = std::max(2.0 * diagonals[diagonals.size() / 2], 1e-3);
-  }
-  for (std::uint32_t i = 0; i < n; ++i) {
-    if (i == moving) continue;
-    const Aabb& b = s->boxes_[i];
-    if ((b.diagonal().array() > kMaxCellsPerAxis * s->cell_mm_).any()) {
-      s->oversized_.push_back(i);
-      continue;
-    }
-    const CellRange r = s->range_of(b);
-    for (std::int64_t x = r.lo[0]; x <= r.hi[0]; ++x)
-      for (std::int64_t y = r.lo[1]; y <= r.hi[1]; ++y)
-        for (std::int64_t z = r.lo[2]; z <= r.hi[2]; ++z) s->cells_[cell_key(x, y, z)].push_back(i);
-  }
+  s->grid_ = std::make_unique<UniformGrid>(s->boxes_, 1e-3, moving);
   return s;
 }
 
-LayoutSession::CellRange LayoutSession::range_of(const Aabb& box) const {
-  CellRange r;
-  for (int k = 0; k < 3; ++k) {
-    r.lo[k] = static_cast<std::int64_t>(std::floor(box.min[k] / cell_mm_));
-    r.hi[k] = static_cast<std::int64_t>(std::floor(box.max[k] / cell_mm_));
-  }
-  return r;
-}
-
-void LayoutSession::gather(const CellRange& range) {
-  gathered_ = oversized_;
+void LayoutSession::gather(const GridCellRange& range) {
+  gathered_ = grid_->oversized();
   if (++stamp_now_ == 0) {  // wrapped: clear the stamps
     std::fill(stamp_.begin(), stamp_.end(), 0);
     stamp_now_ = 1;
   }
-  for (std::int64_t x = range.lo[0]; x <= range.hi[0]; ++x)
-    for (std::int64_t y = range.lo[1]; y <= range.hi[1]; ++y)
-      for (std::int64_t z = range.lo[2]; z <= range.hi[2]; ++z) {
-        auto it = cells_.find(cell_key(x, y, z));
-        if (it == cells_.end()) continue;
-        for (std::uint32_t id : it->second)
-          if (stamp_[id] != stamp_now_) {
-            stamp_[id] = stamp_now_;
-            gathered_.push_back(id);
-          }
-      }
+  grid_->for_each_member(range, [&](std::uint32_t id) {
+    if (stamp_[id] == stamp_now_) return;
+    stamp_[id] = stamp_now_;
+    gathered_.push_back(id);
+  });
   last_range_ = range;
 }
 
@@ -141,14 +98,12 @@ Result<FrameAnswer> LayoutSession::move_to(const RigidTransform& pose) {
   self.pose = pose;
   const Aabb box = transformed_box(self.mesh->root_bounds(), pose).expanded(0.5 * clearance_mm_);
   // A huge moving box would sweep millions of cells: then every static object is a candidate.
-  const CellRange range = range_of(box);
-  double cells = 1.0;
-  for (int k = 0; k < 3; ++k) cells *= static_cast<double>(range.hi[k] - range.lo[k] + 1);
-  if (cells > 4096.0) {
+  const GridCellRange range = grid_cell_range(box, grid_->cell_mm());
+  if (range.cells() > 4096.0) {
     gathered_.clear();
     for (std::uint32_t i = 0; i < objects_.size(); ++i)
       if (i != moving_) gathered_.push_back(i);
-    last_range_ = CellRange{};
+    last_range_ = GridCellRange{{1, 1, 1}, {0, 0, 0}};  // matches no real range
   } else if (!(range == last_range_)) {
     gather(range);
   }

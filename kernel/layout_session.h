@@ -15,6 +15,7 @@
 #include "kernel/contact_verdict.h"
 #include "kernel/oriented_box.h"
 #include "kernel/scene_audit.h"
+#include "kernel/uniform_grid.h"
 
 #include <cstdint>
 #include <memory>
@@ -50,12 +51,7 @@ class LayoutSession {
 
  private:
   LayoutSession() = default;
-  struct CellRange {
-    std::int64_t lo[3] = {0, 0, 0}, hi[3] = {-1, -1, -1};
-    bool operator==(const CellRange& o) const;
-  };
-  CellRange range_of(const Aabb& box) const;
-  void gather(const CellRange& range);
+  void gather(const GridCellRange& range);
 
   std::vector<AuditObject> objects_;
   std::uint32_t moving_ = 0;
@@ -63,10 +59,8 @@ class LayoutSession {
   std::vector<Aabb> boxes_;             // static objects' world boxes
   std::vector<OrientedBox> obbs_;       // static objects' world oriented boxes
   OrientedBox moving_local_obb_;        // in the moving mesh's frame
-  double cell_mm_ = 1.0;
-  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> cells_;
-  std::vector<std::uint32_t> oversized_;
-  CellRange last_range_;
+  std::unique_ptr<UniformGrid> grid_;    // the static objects (the moving one left out)
+  GridCellRange last_range_{{1, 1, 1}, {0, 0, 0}};
   std::vector<std::uint32_t> gathered_;  // static objects in the last cell range (and oversized)
   std::vector<std::uint32_t> stamp_;
   std::uint32_t stamp_now_ = 0;
