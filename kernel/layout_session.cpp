@@ -1,5 +1,7 @@
 #include "kernel/layout_session.h"
 
+#include "kernel/tolerances.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -61,6 +63,14 @@ Result<std::unique_ptr<LayoutSession>> LayoutSession::create(std::vector<AuditOb
   s->moving_ = moving;
   s->clearance_mm_ = clearance_mm;
   const std::size_t n = s->objects_.size();
+  // A pair is cleared by boxes only when they are farther apart than the clearance and the contact
+  // tolerance (assess calls closer pairs TOUCHING), with a slack for rounding in the box fits.
+  double magnitude = 1.0;
+  for (const AuditObject& o : s->objects_) {
+    const Aabb b = transformed_box(o.mesh->root_bounds(), o.pose);
+    magnitude = std::max({magnitude, b.min.cwiseAbs().maxCoeff(), b.max.cwiseAbs().maxCoeff()});
+  }
+  s->needed_gap_mm_ = std::max(clearance_mm, tolerances::kContactMm) + 1e-9 * magnitude;
   s->boxes_.resize(n);
   s->obbs_.resize(n);
   s->stamp_.assign(n, 0);
@@ -71,7 +81,7 @@ Result<std::unique_ptr<LayoutSession>> LayoutSession::create(std::vector<AuditOb
     auto it = local.find(o.mesh.get());
     if (it == local.end()) it = local.emplace(o.mesh.get(), obb_of(*o.mesh)).first;
     s->obbs_[i] = placed(it->second, o.pose);
-    s->boxes_[i] = transformed_box(o.mesh->root_bounds(), o.pose).expanded(0.5 * clearance_mm);
+    s->boxes_[i] = transformed_box(o.mesh->root_bounds(), o.pose).expanded(0.5 * s->needed_gap_mm_);
   }
   s->moving_local_obb_ = local.at(s->objects_[moving].mesh.get());
   s->grid_ = std::make_unique<UniformGrid>(s->boxes_, 1e-3, moving);
@@ -96,7 +106,7 @@ Result<FrameAnswer> LayoutSession::move_to(const RigidTransform& pose) {
   if (!pose.is_finite() || !pose.is_rigid()) return invalid_argument("pose", "must be a finite rigid transform");
   AuditObject& self = objects_[moving_];
   self.pose = pose;
-  const Aabb box = transformed_box(self.mesh->root_bounds(), pose).expanded(0.5 * clearance_mm_);
+  const Aabb box = transformed_box(self.mesh->root_bounds(), pose).expanded(0.5 * needed_gap_mm_);
   // A huge moving box would sweep millions of cells: then every static object is a candidate.
   const GridCellRange range = grid_cell_range(box, grid_->cell_mm());
   if (range.cells() > 4096.0) {
@@ -113,13 +123,12 @@ Result<FrameAnswer> LayoutSession::move_to(const RigidTransform& pose) {
     if (!boxes_[id].overlaps(box)) continue;
     ++out.candidates;
     auto cached = separating_axis_.find(id);
-    if (cached != separating_axis_.end() && gap_along(obb, obbs_[id], cached->second) >= clearance_mm_ &&
-        gap_along(obb, obbs_[id], cached->second) > 0.0) {
+    if (cached != separating_axis_.end() && gap_along(obb, obbs_[id], cached->second) > needed_gap_mm_) {
       ++out.axis_cache_hits;
       continue;
     }
     const auto [gap, axis] = best_box_axis(obb, obbs_[id]);
-    if (gap >= clearance_mm_ && gap > 0.0) {
+    if (gap > needed_gap_mm_) {
       separating_axis_[id] = axis;
       ++out.box_axis_clears;
       continue;

@@ -56,6 +56,7 @@ class LayoutSession {
   std::vector<AuditObject> objects_;
   std::uint32_t moving_ = 0;
   double clearance_mm_ = 0.0;
+  double needed_gap_mm_ = 0.0;          // a box gap beyond this clears a pair
   std::vector<Aabb> boxes_;             // static objects' world boxes
   std::vector<OrientedBox> obbs_;       // static objects' world oriented boxes
   OrientedBox moving_local_obb_;        // in the moving mesh's frame

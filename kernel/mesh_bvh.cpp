@@ -5,6 +5,7 @@
 #include <BVH_Set.hxx>
 #include <BVH_Tree.hxx>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <numeric>
@@ -166,6 +167,8 @@ Result<std::shared_ptr<MeshBvh>> MeshBvh::deserialize(std::shared_ptr<const Tria
   bvh->impl_->set = std::make_unique<TriangleSet>(*bvh->mesh_, bvh->ordered_to_mesh_);
   bvh->depth_ = depth;
   bvh->reload_corners();
+  // It must be a tree: from the root every node is reached once, no deeper than OCCT builds (the
+  // traversals' stacks are sized for that), and the leaves cover every triangle exactly once.
   // Every box must hold what it claims (the builder's boxes are exact minima and maxima), so a
   // damaged coordinate can never hide a triangle from a query.
   auto inside = [&](int node, const Vec3& p) {
@@ -173,21 +176,37 @@ Result<std::shared_ptr<MeshBvh>> MeshBvh::deserialize(std::shared_ptr<const Tria
     const auto& hi = t.MaxPoint(node);
     return p.x() >= lo.x() && p.y() >= lo.y() && p.z() >= lo.z() && p.x() <= hi.x() && p.y() <= hi.y() && p.z() <= hi.z();
   };
-  for (int i = 0; i < nodes; ++i) {
+  std::vector<char> reached(static_cast<std::size_t>(nodes), 0);
+  std::vector<char> covered(n_tri, 0);
+  std::vector<std::pair<int, int>> stack{{0, 0}};  // node, its depth
+  int deepest = 0;
+  while (!stack.empty()) {
+    const auto [i, level] = stack.back();
+    stack.pop_back();
+    if (reached[i]) return bad("node " + std::to_string(i) + " has two parents");
+    reached[i] = 1;
+    if (level > BVH_Constants_MaxTreeDepth) return bad("deeper than " + std::to_string(BVH_Constants_MaxTreeDepth) + " levels");
+    deepest = std::max(deepest, level);
     const auto& info = t.NodeInfoBuffer()[i];
     if (info.x() != 0) {
-      for (int k = info.y(); k <= info.z(); ++k)
+      for (int k = info.y(); k <= info.z(); ++k) {
+        if (covered[k]) return bad("triangle " + std::to_string(k) + " in two leaves");
+        covered[k] = 1;
         for (const Vec3& p : bvh->ordered_corners_[k])
           if (!inside(i, p)) return bad("node " + std::to_string(i) + " does not bound its triangles");
+      }
     } else {
       for (int child : {info.y(), info.z()}) {
         const auto& lo = t.MinPoint(child);
         const auto& hi = t.MaxPoint(child);
         if (!inside(i, Vec3(lo.x(), lo.y(), lo.z())) || !inside(i, Vec3(hi.x(), hi.y(), hi.z())))
           return bad("node " + std::to_string(i) + " does not bound its children");
+        stack.push_back({child, level + 1});
       }
     }
   }
+  if (std::find(covered.begin(), covered.end(), 0) != covered.end()) return bad("a triangle is in no leaf");
+  if (depth < deepest) return bad("the stored depth is smaller than the tree's");
   bvh->reload_node_boxes();
   return bvh;
 }

@@ -4,6 +4,7 @@
 #include "kernel/contact_regions.h"
 #include "kernel/interference_volume.h"
 #include "kernel/penetration_depth.h"
+#include "kernel/tolerances.h"
 
 #include <algorithm>
 #include <chrono>
@@ -35,7 +36,7 @@ void parallel_for(std::size_t n, int threads, Body&& body) {
     for (std::size_t i = next++; i < n; i = next++) body(i);
   };
   std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(work);
+  for (std::size_t t = 1; t < std::min<std::size_t>(static_cast<std::size_t>(threads), n); ++t) pool.emplace_back(work);
   work();
   for (std::thread& t : pool) t.join();
 }
@@ -51,6 +52,7 @@ std::vector<ClashRegion> regions_of(const std::vector<ProximityPair>& pairs, dou
 bool audit_pair(const AuditObject& oa, const AuditObject& ob, const AuditOptions& options, PairClash& out) {
   VerdictOptions vo;
   vo.max_contacts = options.max_contacts_per_pair;
+  vo.distance_upper_bound_mm = options.clearance_mm;  // farther than the clearance: not a clash, no need to measure
   auto v = assess(*oa.mesh, oa.pose, *ob.mesh, ob.pose, vo);
   if (!v.ok()) {
     out.verdict = Verdict::kInconclusive;  // a gate treats it as a clash
@@ -68,7 +70,7 @@ bool audit_pair(const AuditObject& oa, const AuditObject& ob, const AuditOptions
     std::vector<ProximityPair> pairs;
     for (const Contact& c : r.contacts) pairs.push_back({c.triangle_a, c.triangle_b, 0.0, c.point, c.point});
     out.contacts = static_cast<unsigned>(r.contacts.size());
-    out.contacts_truncated = r.contacts.size() >= options.max_contacts_per_pair;
+    out.contacts_truncated = r.contacts_truncated;
     out.regions = regions_of(pairs, options.region_merge_mm);
   } else {
     auto near = pairs_within(*oa.mesh, oa.pose, *ob.mesh, ob.pose, options.clearance_mm, options.max_contacts_per_pair);
@@ -152,7 +154,11 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
                          : 0.0;
     options.on_progress(progress);
   };
-  const double margin = options.clearance_mm;
+  // Boxes closer than the clearance, or than the contact tolerance (assess calls such a pair
+  // TOUCHING), meet; the slack keeps rounding in the box transforms from dropping an exact touch.
+  double magnitude = 1.0;
+  for (const Aabb& b : boxes) magnitude = std::max({magnitude, b.min.cwiseAbs().maxCoeff(), b.max.cwiseAbs().maxCoeff()});
+  const double margin = std::max(options.clearance_mm, tolerances::kContactMm) + 4.0 * tolerances::kBoxSlackRelative * magnitude;
   std::vector<char> wanted(objects.size(), options.only_objects.empty() ? 1 : 0);
   for (std::uint32_t id : options.only_objects) wanted[id] = 1;
   if (!options.only_objects.empty()) {
@@ -275,6 +281,11 @@ Result<AuditResult> reaudit_scene(const std::vector<AuditObject>& objects, const
   only.only_objects = changed;
   auto fresh = audit_scene(objects, only);
   if (!fresh.ok()) return fresh.error();
+  for (const PairClash& c : previous.clashes)
+    if (c.a >= objects.size() || c.b >= objects.size())
+      return invalid_argument("previous", "a clash names object " + std::to_string(std::max(c.a, c.b)) + ", beyond the objects given");
+  for (std::uint32_t id : changed)
+    if (id >= objects.size()) return invalid_argument("changed", "no object " + std::to_string(id));
   std::vector<char> is_changed(objects.size(), 0);
   for (std::uint32_t id : changed) is_changed[id] = 1;
   AuditResult out = fresh.value();
