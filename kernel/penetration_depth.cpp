@@ -70,27 +70,29 @@ Result<PieceAxes> piece_axes(const MeshBvh& a, const RigidTransform& pose_a, con
 
 }  // namespace
 
-Result<DepthAlong> penetration_along(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
-                                     const RigidTransform& pose_b, const Vec3& direction, double tolerance_mm) {
-  if (!direction.allFinite() || !(direction.norm() > 0.0)) return invalid_argument("direction", "must be a non-zero vector");
-  if (!(tolerance_mm > 0.0)) return invalid_argument("tolerance_mm", "must be positive");
-  const Vec3 u = direction.normalized();
-  DepthAlong out;
-  // Is B free already? (No surface contact, and for closed meshes neither inside the other: the
-  // distance query alone cannot tell containment, so the collide + box test decide it.)
+namespace {
+
+// Is B already free of A? (No surface contact, and for closed meshes neither inside the other:
+// the distance query alone cannot tell containment, so the collide + box test decide it.)
+Result<bool> already_free(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b, const RigidTransform& pose_b) {
   auto touching = collide(a, pose_a, b, pose_b);
   if (!touching.ok()) return touching.error();
+  return !touching.value().colliding &&
+         !transformed_box(a.root_bounds(), pose_a).overlaps(transformed_box(b.root_bounds(), pose_b));
+}
+
+// B, known not to be free, moved along unit u: the largest translation at which it still touches A.
+Result<DepthAlong> advance_back(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b, const RigidTransform& pose_b,
+                                const Vec3& u, double tolerance_mm) {
+  DepthAlong out;
   const Aabb box_a = transformed_box(a.root_bounds(), pose_a), box_b = transformed_box(b.root_bounds(), pose_b);
-  if (!touching.value().colliding && !box_a.overlaps(box_b)) return out;
   // A translation along u that surely separates the boxes.
-  double lo_a = std::numeric_limits<double>::infinity(), hi_a = -lo_a, lo_b = lo_a, hi_b = -lo_a;
+  double hi_a = -std::numeric_limits<double>::infinity(), lo_b = std::numeric_limits<double>::infinity();
   for (int k = 0; k < 8; ++k) {
     const Vec3 ca((k & 1) ? box_a.max.x() : box_a.min.x(), (k & 2) ? box_a.max.y() : box_a.min.y(), (k & 4) ? box_a.max.z() : box_a.min.z());
     const Vec3 cb((k & 1) ? box_b.max.x() : box_b.min.x(), (k & 2) ? box_b.max.y() : box_b.min.y(), (k & 4) ? box_b.max.z() : box_b.min.z());
-    lo_a = std::min(lo_a, u.dot(ca));
     hi_a = std::max(hi_a, u.dot(ca));
     lo_b = std::min(lo_b, u.dot(cb));
-    hi_b = std::max(hi_b, u.dot(cb));
   }
   double t = std::max(0.0, hi_a - lo_b) + 1.0;
   // Back along -u by conservative advancement until the surfaces meet.
@@ -108,6 +110,18 @@ Result<DepthAlong> penetration_along(const MeshBvh& a, const RigidTransform& pos
     if (t <= 0.0) return out;  // back at the start without meeting a surface: B was free
   }
   return Error{ErrorCode::kInternal, "direction", "advancement did not converge"};
+}
+
+}  // namespace
+
+Result<DepthAlong> penetration_along(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
+                                     const RigidTransform& pose_b, const Vec3& direction, double tolerance_mm) {
+  if (!direction.allFinite() || !(direction.norm() > 0.0)) return invalid_argument("direction", "must be a non-zero vector");
+  if (!(tolerance_mm > 0.0)) return invalid_argument("tolerance_mm", "must be positive");
+  auto free = already_free(a, pose_a, b, pose_b);
+  if (!free.ok()) return free.error();
+  if (free.value()) return DepthAlong{};
+  return advance_back(a, pose_a, b, pose_b, direction.normalized(), tolerance_mm);
 }
 
 Result<DepthVector> penetration_vector(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
@@ -134,8 +148,16 @@ Result<DepthVector> penetration_vector(const MeshBvh& a, const RigidTransform& p
     const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
     candidates.emplace_back(r * std::cos(golden * i), r * std::sin(golden * i), z);
   }
+  if (!(tolerance_mm > 0.0)) return invalid_argument("tolerance_mm", "must be positive");
+  // Whether B is free does not depend on the direction: decided once.
+  auto free = already_free(a, pose_a, b, pose_b);
+  if (!free.ok()) return free.error();
+  if (free.value()) {
+    best.depth_mm = 0.0;
+    return best;
+  }
   for (std::size_t i = 0; i < candidates.size(); ++i) {
-    auto d = penetration_along(a, pose_a, b, pose_b, candidates[i], tolerance_mm);
+    auto d = advance_back(a, pose_a, b, pose_b, candidates[i].normalized(), tolerance_mm);
     if (!d.ok()) return d.error();
     ++best.directions_tried;
     if (d.value().depth_mm < best.depth_mm) {

@@ -112,11 +112,14 @@ TEST(ScenesE2E, PutMoveDragDeleteAndTheSceneSurvivesARestart) {
   pb::SceneInfo scene;
   ASSERT_TRUE(stub->GetScene(&gctx, get, &scene).ok());
   ASSERT_EQ(scene.objects_size(), 2);
+  bool found_b = false;
   for (const auto& o : scene.objects()) {
     if (o.object_id() == b) {
+      found_b = true;
       EXPECT_DOUBLE_EQ(o.pose().translation().x_mm(), 2500.0);
     }
   }
+  EXPECT_TRUE(found_b);
   grpc::ClientContext xctx;
   pb::DeleteObjectRequest del;
   del.set_scene_id(scene_id);
