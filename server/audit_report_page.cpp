@@ -8,7 +8,7 @@ namespace gk::server {
 
 // Generated at build time from server/report_page (the template and npm's three.min.js).
 const char* audit_report_template();
-std::string embedded_three_js();
+const std::string& embedded_three_js();  // joined once
 
 namespace {
 

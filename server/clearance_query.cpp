@@ -18,8 +18,6 @@
 namespace gk::server {
 namespace {
 
-// Parts are tessellated for queries at this chordal deflection [mm]; it enters the error bound.
-constexpr double kQueryDeflectionMm = 0.05;
 constexpr std::size_t kMaxReportedPairs = 100000;
 constexpr double kDefaultRegionMergeMm = 10.0;
 // B-Rep refinement gives up (keeping the mesh answer and its bound) beyond these many candidates.
@@ -52,7 +50,7 @@ Result<PosedSide> resolve(const pb::PosedPart& in, const std::string& side, Part
     if (!p.ok()) return p.error();
     pose = p.value();
   }
-  auto loaded = parts.load(part_id, kQueryDeflectionMm);
+  auto loaded = parts.load(part_id, kPartDeflectionMm);
   if (!loaded.ok()) return Error{loaded.error().code, side + ".part_id", loaded.error().message};
   return PosedSide{loaded.value(), pose};
 }

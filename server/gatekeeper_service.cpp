@@ -67,7 +67,7 @@ class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> 
     const bool queued = service_.pool().try_submit([self] {
       auto record = self->service_.parts().store().finish(
           std::move(self->upload_), [](const std::string& path, PartRecord r) -> Result<PartRecord> {
-            auto mesh = PartRegistry::read_any(path, r.format, 0.05);
+            auto mesh = PartRegistry::read_any(path, r.format, kPartDeflectionMm);
             if (!mesh.ok()) return mesh.error();
             r.triangles = static_cast<std::uint32_t>(mesh.value().triangle_count());
             r.bounds_min = mesh.value().bounds().min;
@@ -97,8 +97,11 @@ GatekeeperService::GatekeeperService(MachineRegistry& machines, PartRegistry& pa
                                      ServiceOptions options)
     : machines_(machines), parts_(parts), scenes_(scenes), archive_(archive), options_(options),
       pool_(options.workers, options.max_queued) {
-  if (archive_)
-    for (auto& [id, job] : archive_->load_all()) audits_.restore(id, std::move(job));
+  if (archive_) {
+    std::size_t unreadable = 0;
+    for (auto& [id, job] : archive_->load_all(&unreadable)) audits_.restore(id, std::move(job));
+    if (unreadable > 0) spdlog::warn("{} archived audit jobs could not be read and were skipped", unreadable);
+  }
 }
 
 GatekeeperService::~GatekeeperService() { pool_.stop(); }

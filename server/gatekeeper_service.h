@@ -13,6 +13,7 @@
 #include "server/scene_store.h"
 #include "server/work_pool.h"
 
+#include <chrono>
 #include <memory>
 #include <string>
 
@@ -89,6 +90,9 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
   // A move of one object (unary, or one message of a drag): stored, then its contacts; a drag
   // answers through its stream's layout session.
   grpc::Status move(const pb::MoveObjectRequest& request, pb::MoveResult* response, DragSession* drag = nullptr);
+  // The stored object's contacts at its pose (through the drag's session when there is one).
+  grpc::Status contacts(const std::string& scene_id, const std::string& object_id, double clearance_mm, const RigidTransform& pose,
+                        DragSession* drag, std::chrono::steady_clock::time_point t0, pb::MoveResult* response);
   SceneStore& scenes() { return scenes_; }
   AuditJobs& audits() { return audits_; }
 

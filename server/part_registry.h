@@ -13,6 +13,10 @@
 
 namespace gk::server {
 
+// CAD parts are tessellated at this chordal deflection [mm] for every query (it enters the error
+// bounds); one value, so a part is tessellated and its tree built once.
+inline constexpr double kPartDeflectionMm = 0.05;
+
 struct LoadedPart {
   PartRecord record;
   std::shared_ptr<const TriangleMesh> mesh;

@@ -88,7 +88,7 @@ Result<std::unique_ptr<PartStore>> PartStore::open(const std::string& directory)
   if (sqlite3_open((directory + "/gatekeeper.sqlite").c_str(), &store->db_) != SQLITE_OK)
     return storage_error("cannot open the part database in " + directory);
   const char* schema =
-      "PRAGMA journal_mode=WAL; PRAGMA synchronous=FULL;"
+      "PRAGMA journal_mode=WAL; PRAGMA synchronous=FULL; PRAGMA busy_timeout=5000;"
       "CREATE TABLE IF NOT EXISTS parts (id TEXT PRIMARY KEY, name TEXT, format TEXT, size INTEGER, triangles INTEGER,"
       " min_x REAL, min_y REAL, min_z REAL, max_x REAL, max_y REAL, max_z REAL, closed INTEGER,"
       " created TEXT DEFAULT CURRENT_TIMESTAMP);";

@@ -66,7 +66,7 @@ Result<p4::MachineState> to_state(const pb::MachineState& in, const p4::MachineM
 
 Result<p4::SheetPart> to_part(const pb::SheetPart& in, PartRegistry& parts) {
   if (!in.part_id().empty()) {
-    const double deflection = in.deflection_mm() > 0.0 ? in.deflection_mm() : 0.05;
+    const double deflection = in.deflection_mm() > 0.0 ? in.deflection_mm() : kPartDeflectionMm;
     auto loaded = parts.load(in.part_id(), deflection);
     if (!loaded.ok()) return Error{loaded.error().code, "part.part_id", loaded.error().message};
     auto part = p4::SheetPart::from_surface(*loaded.value()->mesh, in.thickness_mm(), loaded.value()->deflection_mm);

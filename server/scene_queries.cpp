@@ -19,7 +19,7 @@ struct Placed {
 
 
 Result<Placed> place(const SceneObjectRecord& o, PartRegistry& parts) {
-  auto part = parts.load(o.part_id, 0.05);
+  auto part = parts.load(o.part_id, kPartDeflectionMm);
   if (!part.ok()) return Error{part.error().code, "objects[" + o.id + "].part_id", part.error().message};
   const RigidTransform pose = o.pose.transform();
   return Placed{&o, part.value(), pose, transformed_box(part.value()->mesh->bounds(), pose)};

@@ -104,19 +104,24 @@ grpc::Status GatekeeperService::move(const pb::MoveObjectRequest& request, pb::M
     return {grpc::StatusCode::INVALID_ARGUMENT, "clearance_mm: must be a finite distance >= 0"};
   auto moved = scenes_.move(request.scene_id(), request.object_id(), pose.value());
   if (!moved.ok()) return to_status(moved.error());
+  return contacts(request.scene_id(), request.object_id(), request.clearance_mm(), pose.value().transform(), drag, t0, response);
+}
+
+grpc::Status GatekeeperService::contacts(const std::string& scene_id, const std::string& object_id, double clearance_mm,
+                                         const RigidTransform& pose, DragSession* drag, Clock::time_point t0,
+                                         pb::MoveResult* response) {
   Result<MoveOutcome> outcome = Error{};
   if (drag) {
-    auto version = scenes_.version(request.scene_id());
+    auto version = scenes_.version(scene_id);
     if (!version.ok()) return to_status(version.error());
-    outcome = drag->move(request.scene_id(), version.value(), [&] { return scenes_.get(request.scene_id()); }, request.object_id(),
-                         request.clearance_mm(), pose.value().transform(), parts_);
+    outcome = drag->move(scene_id, version.value(), [&] { return scenes_.get(scene_id); }, object_id, clearance_mm, pose, parts_);
   } else {
-    auto scene = scenes_.get(request.scene_id());
+    auto scene = scenes_.get(scene_id);
     if (!scene.ok()) return to_status(scene.error());
-    outcome = object_contacts(scene.value(), request.object_id(), request.clearance_mm(), parts_);
+    outcome = object_contacts(scene.value(), object_id, clearance_mm, parts_);
   }
   if (!outcome.ok()) return to_status(outcome.error());
-  response->set_object_id(request.object_id());
+  response->set_object_id(object_id);
   response->set_verdict(to_proto(outcome.value().verdict));
   response->set_candidates(outcome.value().candidates);
   for (const ObjectContactResult& c : outcome.value().contacts) {
@@ -139,14 +144,13 @@ grpc::ServerUnaryReactor* GatekeeperService::PutObject(grpc::CallbackServerConte
   if (!part.ok()) return finish(ctx, stats_, "PutObject", t0, to_status(Error{part.error().code, "object.part_id", part.error().message}));
   auto pose = to_stored_pose(in.pose(), "object.pose");
   if (!pose.ok()) return finish(ctx, stats_, "PutObject", t0, to_status(pose.error()));
+  if (!std::isfinite(request->clearance_mm()) || request->clearance_mm() < 0.0)
+    return finish(ctx, stats_, "PutObject", t0, {grpc::StatusCode::INVALID_ARGUMENT, "clearance_mm: must be a finite distance >= 0"});
   auto stored = scenes_.put(request->scene_id(), {in.object_id(), in.name(), in.category(), in.part_id(), pose.value(), in.group()});
   if (!stored.ok()) return finish(ctx, stats_, "PutObject", t0, to_status(stored.error()));
-  pb::MoveObjectRequest as_move;
-  as_move.set_scene_id(request->scene_id());
-  as_move.set_object_id(stored.value().id);
-  *as_move.mutable_pose() = in.pose();
-  as_move.set_clearance_mm(request->clearance_mm());
-  return finish(ctx, stats_, "PutObject", t0, move(as_move, response));
+  // Stored once; then the new object's contacts, as a move would answer them.
+  return finish(ctx, stats_, "PutObject", t0,
+                contacts(request->scene_id(), stored.value().id, request->clearance_mm(), pose.value().transform(), nullptr, t0, response));
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::PutObjects(grpc::CallbackServerContext* ctx, const pb::PutObjectsRequest* request,

@@ -147,7 +147,8 @@ Result<std::vector<SceneObjectRecord>> SceneStore::put_many(const std::string& s
   if (it == scenes_.end()) return Error{ErrorCode::kNotFound, "scene_id", "no scene '" + scene_id + "'"};
   for (SceneObjectRecord& o : objects)
     if (o.id.empty()) o.id = new_id("obj");
-  sqlite3_exec(db_, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr);
+  if (sqlite3_exec(db_, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr) != SQLITE_OK)
+    return storage_error("cannot begin the transaction for the objects");
   for (const SceneObjectRecord& o : objects) {
     auto written = write_object(scene_id, o);
     if (!written.ok()) {
