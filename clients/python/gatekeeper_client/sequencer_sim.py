@@ -170,6 +170,7 @@ def main(argv=None):
         slots.append((x, x + w))
         x += w
     print(f"gatekeeperd at {args.address}: machine {machine.machine_id} ({machine.name}), {machine.aba_segments} ABA segments")
+    parts_without_sequence = 0
     for part in sample_parts():
         rows, feasible = [], []
         for n, order in enumerate(itertools.islice(itertools.permutations(part.planned), args.orders)):
@@ -187,10 +188,12 @@ def main(argv=None):
             print(f"best feasible sequence: {best[2]} ({best[0]} corrections, {best[1]:.0f} us of gatekeeping)")
         else:
             print("no feasible sequence among the orders tried")
+            parts_without_sequence += 1
     info = stub.GetServerInfo(pb.GetServerInfoRequest(), timeout=5.0)
     for r in info.rpcs:
         print(f"server: {r.method}: {r.calls} calls, p50 {r.p50_us:.0f} us, p99 {r.p99_us:.0f} us")
-    return 0
+    # Exit status 1 when some part found no feasible bend order (a planner would have to stop).
+    return 1 if parts_without_sequence else 0
 
 
 if __name__ == "__main__":

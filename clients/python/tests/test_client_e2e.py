@@ -79,7 +79,7 @@ class DaemonTest(unittest.TestCase):
             self.assertIn("layout demo", html)
 
     def test_sequencer_simulator_runs_and_finds_a_sequence(self):
-        self.assertEqual(sequencer_sim.main(["--address", self.address, "--orders", "1"]), 0)
+        self.assertEqual(sequencer_sim.main(["--address", self.address, "--orders", "6"]), 0)
 
 
 if __name__ == "__main__":
