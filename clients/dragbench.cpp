@@ -1,7 +1,8 @@
 // gatekeeper-dragbench: a layout tool's drag through gatekeeperd, timed. It uploads a 1 m cube,
-// fills a new scene with a grid of copies (2 m pitch, one PutObjects batch), then drags one more cube along the grid's
-// rows through a DragObject stream, 1,030 mm from the row's centre line so that every neighbour
-// passes 30 mm away (inside the clearance), and prints the per-frame round trip and the daemon's
+// fills a new scene with a grid of copies (one PutObjects batch; 2,000 mm apart along x, 2,060 mm
+// between rows), then drags one more cube along the grid's rows through a DragObject stream,
+// midway between two rows, so that every neighbour in both rows passes 30 mm away (inside the
+// clearance), and prints the per-frame round trip and the daemon's
 // own time per frame.
 //
 //   gatekeeper-dragbench --address 127.0.0.1:50051 [--objects 2000] [--frames 2000] [--clearance 50]
@@ -22,6 +23,9 @@ namespace pb = ::gatekeeper::v1;
 using Clock = std::chrono::steady_clock;
 
 namespace {
+
+// Rows of 1 m cubes this far apart leave 1,060 mm between them: a 1 m cube midway is 30 mm from both.
+constexpr double kRowPitchMm = 2060.0;
 
 std::string cube_obj() {
   std::string obj;
@@ -104,7 +108,7 @@ int main(int argc, char** argv) {
     pb::SceneObject* o = batch.add_objects();
     o->set_part_id(cube.part_id());
     o->set_category("cube");
-    *o->mutable_pose() = at(2000.0 * (i % side), 2000.0 * (i / side));
+    *o->mutable_pose() = at(2000.0 * (i % side), kRowPitchMm * (i / side));
   }
   {
     grpc::ClientContext fill;
@@ -119,7 +123,7 @@ int main(int argc, char** argv) {
     put.set_scene_id(scene.scene_id());
     put.mutable_object()->set_part_id(cube.part_id());
     put.mutable_object()->set_name("dragged");
-    *put.mutable_object()->mutable_pose() = at(-3000, 1030);
+    *put.mutable_object()->mutable_pose() = at(-3000, 0.5 * kRowPitchMm);
     pb::MoveResult r;
     if (!stub->PutObject(&ctx, put, &r).ok()) return 1;
     dragged = r.object_id();
@@ -137,7 +141,7 @@ int main(int argc, char** argv) {
     move.set_scene_id(scene.scene_id());
     move.set_object_id(dragged);
     move.set_clearance_mm(clearance);
-    *move.mutable_pose() = at(-1000.0 + std::fmod(s, row_length), 2000.0 * row + 1030.0);
+    *move.mutable_pose() = at(-1000.0 + std::fmod(s, row_length), kRowPitchMm * row + 0.5 * kRowPitchMm);
     const auto t0 = Clock::now();
     pb::MoveResult r;
     if (!stream->Write(move) || !stream->Read(&r)) break;

@@ -23,7 +23,7 @@ int main(int argc, char** argv) {
   const bool hug = argc > 4 && std::string(argv[4]) == "hug";
   const gk::testing::FactoryScene scene = gk::testing::generate_factory_scene(scene_options);
   std::uint32_t moving = 0;
-  while (scene.objects[moving].category != "machine") ++moving;  // a TR12J, 67k triangles
+  while (scene.objects[moving].category != "machine") ++moving;  // the first machine: fandisk, 31,682 triangles
   const auto t_setup = std::chrono::steady_clock::now();
   auto session = gk::LayoutSession::create(scene.objects, moving, clearance);
   if (!session.ok()) {

@@ -127,7 +127,7 @@ void BM_P4Sequence_GeometryWarm(benchmark::State& s) { run(s, Mode::kGeometryWar
 void BM_P4Sequence_MemoHit(benchmark::State& s) { run(s, Mode::kMemoHit); }
 
 // A denied step: a 300 mm flange bent up hits the upper beam (first contact near 42.6 degrees).
-// Cold every time; with and without the correction search.
+// Cold every time; `corrections` says whether the correction search runs (the registered run: without).
 void collision_step(benchmark::State& state, bool corrections) {
   const MachineModel model = default_machine_model().value();
   auto scene = MachineScene::build(model).value();
