@@ -168,8 +168,7 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
     // Ray parity through the BVH decides it in O(log n); the winding number (O(n)) only when
     // every ray was degenerate.
     auto inside = [](const MeshBvh& m, const Vec3& p) {
-      if (!m.mesh().bounds().overlaps(Aabb{p, p})) return false;
-      if (const auto parity = point_inside(m, p)) return *parity;
+      if (const auto parity = point_inside(m, p)) return *parity;  // false outside its box at once
       return std::fabs(winding_number(m.mesh(), p)) > 0.5;
     };
     const bool b_inside_a = inside(a, b_vertex_in_a);

@@ -141,7 +141,6 @@ std::vector<int> MachineScene::organs_overlapping(const Aabb& box) const {
   stack[top++] = 0;
   while (top > 0) {
     const int n = stack[--top];
-    ++node_tests_;
     const auto& lo = t.MinPoint(n);
     const auto& hi = t.MaxPoint(n);
     if (hi.x() < box.min.x() || lo.x() > box.max.x() || hi.y() < box.min.y() || lo.y() > box.max.y() ||
@@ -159,10 +158,5 @@ std::vector<int> MachineScene::organs_overlapping(const Aabb& box) const {
   return out;
 }
 
-Aabb MachineScene::bounds() const {
-  Aabb b;
-  for (const Organ& o : organs_) b.extend(o.box);
-  return b;
-}
 
 }  // namespace gk::p4

@@ -42,8 +42,6 @@ class MachineScene {
   const std::vector<Organ>& organs() const { return organs_; }
   // Organs whose box overlaps the query box (by a tree traversal), ascending index order.
   std::vector<int> organs_overlapping(const Aabb& box) const;
-  Aabb bounds() const;                 // of every organ in the current state
-  long long node_tests() const { return node_tests_; }
 
   struct Tree;
   ~MachineScene();
@@ -58,7 +56,6 @@ class MachineScene {
   MachineState state_;
   std::vector<Organ> organs_;
   std::unique_ptr<Tree> tree_;
-  mutable long long node_tests_ = 0;
 };
 
 }  // namespace gk::p4

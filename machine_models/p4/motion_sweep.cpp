@@ -180,7 +180,6 @@ Result<HullLodResult> hull_lod(const std::vector<MovingBody>& bodies, const Moti
   for (const MovingBody& body : bodies) {
     const std::vector<MovingBody> one = {body};
     const std::vector<Vec3> pts = sampled_points(one, motion, out.samples);
-    for (const Vec3& p : pts) out.swept_box.extend(p);
     auto hull = motion.rotation ? axial_prism_hull(pts, motion.axis_point, motion.axis_direction) : convex_hull_polytope(pts);
     if (!hull.ok()) {  // a flat sweep has no hull: this body clears nothing here
       std::fill(cleared.begin(), cleared.end(), 0);
@@ -189,7 +188,6 @@ Result<HullLodResult> hull_lod(const std::vector<MovingBody>& bodies, const Moti
     for (std::size_t i = 0; i < organs.size(); ++i)
       if (cleared[i]) cleared[i] = hull_clears(hull.value(), organs[i], out.sagitta_mm + clearance_mm) ? 1 : 0;
   }
-  out.swept_box = out.swept_box.expanded(out.sagitta_mm);
   for (std::size_t i = 0; i < organs.size(); ++i)
     if (!cleared[i]) out.remaining.push_back(static_cast<int>(i));
   return out;

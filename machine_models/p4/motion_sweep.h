@@ -46,7 +46,6 @@ struct HullLodResult {
   std::vector<int> remaining;  // indices into the organ list that the hull could not clear
   double sagitta_mm = 0.0;
   int samples = 0;
-  Aabb swept_box;              // a box containing the whole sweep
 };
 
 // The hull level of detail. max_sample_step_rad bounds the angle between samples.

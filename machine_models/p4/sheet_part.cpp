@@ -96,6 +96,7 @@ Result<SheetPart> SheetPart::create(const SheetPartSpec& spec) {
                             {Vec3(tab.x_max_mm - tab.x_min_mm, 0, 0), Vec3(0, t, 0), Vec3(0, 0, tab.height_mm)},
                             "tab." + std::to_string(i)});
   }
+  part.hash_ = part.compute_hash();
   return part;
 }
 
@@ -103,6 +104,7 @@ SheetPart SheetPart::from_plates(std::vector<Plate> plates, double thickness_mm)
   SheetPart p;
   p.plates_ = std::move(plates);
   p.thickness_ = thickness_mm;
+  p.hash_ = p.compute_hash();
   return p;
 }
 
@@ -113,6 +115,7 @@ Result<SheetPart> SheetPart::from_surface(TriangleMesh surface, double thickness
   part.thickness_ = thickness_mm;
   part.deflection_ = deflection_mm;
   part.surface_ = std::make_shared<const TriangleMesh>(std::move(surface));
+  part.hash_ = part.compute_hash();
   return part;
 }
 
@@ -190,7 +193,7 @@ TriangleMesh SheetPart::mesh(std::vector<int>* plate_of_triangle) const {
   return plates_mesh(plates_);
 }
 
-std::uint64_t SheetPart::content_hash() const {
+std::uint64_t SheetPart::compute_hash() const {
   ContentHash h;
   h.add(thickness_);
   if (surface_) {
@@ -268,6 +271,7 @@ SheetPart SheetPart::turned_over(const Vec2& point, const Vec2& axis) const {
     (void)turned.set_vertices(std::move(v));
     out.surface_ = std::make_shared<const TriangleMesh>(std::move(turned));
   }
+  out.hash_ = out.compute_hash();
   return out;
 }
 

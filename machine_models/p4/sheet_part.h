@@ -68,7 +68,8 @@ class SheetPart {
   // All plates as one mesh of closed boxes; plate_of_triangle maps back to plates().
   TriangleMesh mesh(std::vector<int>* plate_of_triangle = nullptr) const;
   // A content hash of the geometry, for memo keys.
-  std::uint64_t content_hash() const;
+  // Of the geometry, computed once when the part is made (a part never changes afterwards).
+  std::uint64_t content_hash() const { return hash_; }
 
   // Splits the part by the vertical plane through the bend line (point, direction in XY; the
   // moving side lies to the left of the direction). Plates on the moving side beyond offset_mm go
@@ -91,6 +92,8 @@ class SheetPart {
   double thickness_ = 0.0;
   std::shared_ptr<const TriangleMesh> surface_;
   double deflection_ = 0.0;
+  std::uint64_t hash_ = 0;
+  std::uint64_t compute_hash() const;
 };
 
 TriangleMesh plates_mesh(const std::vector<Plate>& plates);
