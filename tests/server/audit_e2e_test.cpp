@@ -33,17 +33,10 @@ struct Placed {
   double turn_deg = 0.0;
 };
 
-std::string box_obj(double sx, double sy, double sz) {
-  std::string obj;
-  for (int k = 0; k < 8; ++k)
-    obj += "v " + std::to_string((k & 1) ? sx : 0.0) + " " + std::to_string((k & 2) ? sy : 0.0) + " " + std::to_string((k & 4) ? sz : 0.0) + "\n";
-  return obj + "f 1 3 4\nf 1 4 2\nf 5 6 8\nf 5 8 7\nf 1 2 6\nf 1 6 5\nf 3 7 8\nf 3 8 4\nf 1 5 7\nf 1 7 3\nf 2 4 8\nf 2 8 6\n";
-}
+std::string box_obj(double sx, double sy, double sz) { return testing::box_obj(0, 0, 0, sx, sy, sz); }
 
 std::string upload(pb::Gatekeeper::Stub& stub, const std::string& bytes, const std::string& format) {
-  pb::PartInfo info;
-  EXPECT_TRUE(testing::upload_part(stub, bytes, format, &info).ok());
-  return info.part_id();
+  return testing::upload_part_id(stub, bytes, format);
 }
 
 pb::Pose pose_of(const Placed& p) {

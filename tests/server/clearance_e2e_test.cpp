@@ -48,19 +48,11 @@ pb::ClearanceQueryResponse query(pb::Gatekeeper::Stub& stub, const pb::Clearance
 }
 
 std::string upload(pb::Gatekeeper::Stub& stub, const std::string& bytes, const std::string& format) {
-  pb::PartInfo info;
-  EXPECT_TRUE(testing::upload_part(stub, bytes, format, &info).ok());
-  return info.part_id();
+  return testing::upload_part_id(stub, bytes, format);
 }
 
 // A closed 100 mm cube centred on its origin, as OBJ text.
-std::string cube_obj() {
-  std::string obj;
-  for (int k = 0; k < 8; ++k)
-    obj += "v " + std::to_string((k & 1) ? 50 : -50) + " " + std::to_string((k & 2) ? 50 : -50) + " " +
-           std::to_string((k & 4) ? 50 : -50) + "\n";
-  return obj + "f 1 3 4\nf 1 4 2\nf 5 6 8\nf 5 8 7\nf 1 2 6\nf 1 6 5\nf 3 7 8\nf 3 8 4\nf 1 5 7\nf 1 7 3\nf 2 4 8\nf 2 8 6\n";
-}
+std::string cube_obj() { return testing::box_obj(-50, -50, -50, 50, 50, 50); }
 
 TEST(ClearanceE2E, MicrometreGapsAndOverlapsFiftyMetresOutAreDecidedInEveryOrientation) {
   Daemon daemon(testing::temp_dir("clearance-precision"));

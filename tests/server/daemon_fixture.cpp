@@ -109,4 +109,18 @@ grpc::Status upload_part(gatekeeper::v1::Gatekeeper::Stub& stub, const std::stri
   return writer->Finish();
 }
 
+std::string upload_part_id(gatekeeper::v1::Gatekeeper::Stub& stub, const std::string& bytes, const std::string& format) {
+  gatekeeper::v1::PartInfo info;
+  EXPECT_TRUE(upload_part(stub, bytes, format, &info).ok());
+  return info.part_id();
+}
+
+std::string box_obj(double lo_x, double lo_y, double lo_z, double hi_x, double hi_y, double hi_z) {
+  std::string obj;
+  for (int k = 0; k < 8; ++k)
+    obj += "v " + std::to_string((k & 1) ? hi_x : lo_x) + " " + std::to_string((k & 2) ? hi_y : lo_y) + " " +
+           std::to_string((k & 4) ? hi_z : lo_z) + "\n";
+  return obj + "f 1 3 4\nf 1 4 2\nf 5 6 8\nf 5 8 7\nf 1 2 6\nf 1 6 5\nf 3 7 8\nf 3 8 4\nf 1 5 7\nf 1 7 3\nf 2 4 8\nf 2 8 6\n";
+}
+
 }  // namespace gk::testing

@@ -35,6 +35,12 @@ std::string temp_dir(const std::string& tag);
 std::string sha256_hex(const std::string& bytes);
 std::string read_file(const std::string& path);
 
+// Uploads and returns the part id (a failed upload fails the test and returns "").
+std::string upload_part_id(gatekeeper::v1::Gatekeeper::Stub& stub, const std::string& bytes, const std::string& format);
+
+// A closed, outward-wound box from lo to hi as OBJ text (12 triangles).
+std::string box_obj(double lo_x, double lo_y, double lo_z, double hi_x, double hi_y, double hi_z);
+
 // Streams bytes to UploadPart in chunks of at most `chunk` bytes (header first); declared_sha
 // empty means the true sha256.
 grpc::Status upload_part(gatekeeper::v1::Gatekeeper::Stub& stub, const std::string& bytes, const std::string& format,

@@ -237,9 +237,7 @@ TEST(GatekeeperdE2E, ClearanceQueryMatchesTheKernelAndRefusesOverload) {
   EXPECT_TRUE(resp.gap_violated());
   // Two closed 10 mm cubes overlapping by 2 mm: regions, depth and volume; an open mesh says why
   // it has no volume.
-  const std::string cube_obj =
-      "v 0 0 0\nv 10 0 0\nv 0 10 0\nv 10 10 0\nv 0 0 10\nv 10 0 10\nv 0 10 10\nv 10 10 10\n"
-      "f 1 3 4\nf 1 4 2\nf 5 6 8\nf 5 8 7\nf 1 2 6\nf 1 6 5\nf 3 7 8\nf 3 8 4\nf 1 5 7\nf 1 7 3\nf 2 4 8\nf 2 8 6\n";
+  const std::string cube_obj = testing::box_obj(0, 0, 0, 10, 10, 10);
   pb::PartInfo cube;
   ASSERT_TRUE(upload(*stub, cube_obj, "obj", &cube).ok());
   EXPECT_TRUE(cube.closed());

@@ -21,9 +21,7 @@ namespace pb = ::gatekeeper::v1;
 using testing::Daemon;
 
 std::string upload_file(pb::Gatekeeper::Stub& stub, const std::string& relative, const std::string& format) {
-  pb::PartInfo info;
-  EXPECT_TRUE(testing::upload_part(stub, testing::read_file(testing::shared_data(relative)), format, &info).ok());
-  return info.part_id();
+  return testing::upload_part_id(stub, testing::read_file(testing::shared_data(relative)), format);
 }
 
 pb::Pose at_x(double x) {
