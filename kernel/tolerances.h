@@ -26,4 +26,33 @@ inline constexpr double kZeroAreaMm2 = 0.0;
 // Largest coordinate magnitude accepted in a mesh or pose (1 km beyond the biggest factory). [mm]
 inline constexpr double kMaxCoordinateMm = 1.0e7;
 
+// ---- machine steps (the P4 panel bender's ValidateStep) ----
+
+// The default required clearance of a step: a moving or held body closer than this to an organ is
+// a collision (seed 002 Table 1: "minimum clearance about 0.1 mm"); a request may change it. [mm]
+inline constexpr double kStepClearanceMm = 0.1;
+
+// Advancement converges on a first contact from above: a clearance within this of the required
+// one is called a contact, so a step is denied conservatively up to this much beyond it. [mm]
+inline constexpr double kStepContactResolutionMm = 1.0e-3;
+
+// Intended contact: a part resting on a support's top face, or pressed by an engaged ABA segment
+// on its upper face, may cross that face by at most this much; deeper is a collision. What lies
+// within this of the face plane is not checked against that organ (it is the contact itself). [mm]
+inline constexpr double kIntendedContactMm = 1.0e-2;
+
+// A step is clamped when the engaged ABA segments press at least this much of the part's upper
+// face (the sheet under the blankholder). [mm^2]
+inline constexpr double kMinClampedAreaMm2 = 1.0;
+
+// A CLEAR step reports its smallest clearance over the whole motion as a proven bracket, refined
+// until it is this narrow (or this fraction of the clearance, whichever is larger)... [mm], [1]
+inline constexpr double kClearanceBracketMm = 5.0e-3;
+inline constexpr double kClearanceBracketRelative = 1.0e-2;
+// ...for clearances below this; farther ones are reported as a lower bound only. [mm]
+inline constexpr double kClearanceReportWindowMm = 10.0;
+
+// The deepest penetration over a colliding motion is searched to within this. [mm]
+inline constexpr double kStepDepthResolutionMm = 1.0e-3;
+
 }  // namespace gk::tolerances

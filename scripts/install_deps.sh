@@ -9,6 +9,8 @@ PACKAGES=(
   # geometry: OpenCASCADE 7.6.3 and Eigen
   libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev
   libocct-data-exchange-dev libocct-visualization-dev libocct-ocaf-dev
+  # OCCT's CMake targets link TBB (libtbb.so): without it ninja stops at gatekeeperd
+  libtbb-dev
   libeigen3-dev
   # mesh files (STL, OBJ, OFF, PLY, glTF)
   libassimp-dev

@@ -43,8 +43,10 @@ Result<p4::BendStep> to_step(const pb::Step& in) {
   s.travel_mm = Vec3(in.travel().x_mm(), in.travel().y_mm(), in.travel().z_mm());
   s.lateral_shift_mm = in.lateral_shift_mm();
   s.retract_mm = in.retract_mm();
+  s.turned_deg = in.turned_deg();
   for (auto [v, f] : {std::pair{s.target_angle_deg, "step.target_angle_deg"}, std::pair{s.rotate_angle_deg, "step.rotate_angle_deg"},
-                      std::pair{s.lateral_shift_mm, "step.lateral_shift_mm"}, std::pair{s.retract_mm, "step.retract_mm"}}) {
+                      std::pair{s.lateral_shift_mm, "step.lateral_shift_mm"}, std::pair{s.retract_mm, "step.retract_mm"},
+                      std::pair{s.turned_deg, "step.turned_deg"}}) {
     auto ok = finite(v, f);
     if (!ok.ok()) return ok.error();
   }
@@ -138,13 +140,64 @@ void to_proto(const PartRecord& r, pb::PartInfo* out) {
   out->set_closed(r.closed);
 }
 
+void to_proto(const p4::BendStep& s, pb::Step* out) {
+  switch (s.kind) {
+    case p4::StepKind::kClamp: out->set_kind(pb::CLAMP); break;
+    case p4::StepKind::kBendUp: out->set_kind(pb::BEND_UP); break;
+    case p4::StepKind::kBendDown: out->set_kind(pb::BEND_DOWN); break;
+    case p4::StepKind::kRotate: out->set_kind(pb::ROTATE); break;
+    case p4::StepKind::kApproach: out->set_kind(pb::APPROACH); break;
+    case p4::StepKind::kRetract: out->set_kind(pb::RETRACT); break;
+  }
+  out->mutable_bend_point()->set_x_mm(s.bend_point_mm.x());
+  out->mutable_bend_point()->set_y_mm(s.bend_point_mm.y());
+  out->mutable_bend_direction()->set_x_mm(s.bend_direction.x());
+  out->mutable_bend_direction()->set_y_mm(s.bend_direction.y());
+  out->set_target_angle_deg(s.target_angle_deg);
+  out->set_rotate_angle_deg(s.rotate_angle_deg);
+  to_proto(s.travel_mm, out->mutable_travel());
+  out->set_lateral_shift_mm(s.lateral_shift_mm);
+  out->set_retract_mm(s.retract_mm);
+  out->set_turned_deg(s.turned_deg);
+}
+
+namespace {
+
+pb::InconclusiveReason to_proto(p4::DenialReason r) {
+  switch (r) {
+    case p4::DenialReason::kNone: return pb::INCONCLUSIVE_REASON_UNSPECIFIED;
+    case p4::DenialReason::kMachineLimit: return pb::MACHINE_LIMIT;
+    case p4::DenialReason::kSweepBudget: return pb::SWEEP_BUDGET_EXHAUSTED;
+  }
+  return pb::INCONCLUSIVE_REASON_UNSPECIFIED;
+}
+
+pb::MachineLimit to_proto(p4::MachineLimit l) {
+  switch (l) {
+    case p4::MachineLimit::kNone: return pb::MACHINE_LIMIT_NONE;
+    case p4::MachineLimit::kManipulatorTravelX: return pb::MANIPULATOR_TRAVEL_X;
+    case p4::MachineLimit::kManipulatorTravelY: return pb::MANIPULATOR_TRAVEL_Y;
+    case p4::MachineLimit::kGripNotOnPart: return pb::GRIP_NOT_ON_PART;
+    case p4::MachineLimit::kNoClampingSegment: return pb::NO_CLAMPING_SEGMENT;
+    case p4::MachineLimit::kBendAngle: return pb::BEND_ANGLE;
+    case p4::MachineLimit::kThickness: return pb::THICKNESS;
+    case p4::MachineLimit::kBendLength: return pb::BEND_LENGTH;
+  }
+  return pb::MACHINE_LIMIT_NONE;
+}
+
+}  // namespace
+
 void to_proto(const p4::StepAnswer& a, pb::ValidateStepResponse* out) {
   out->set_verdict(to_proto(a.verdict));
   out->set_reason(a.reason);
   out->set_decided_by(p4::to_string(a.decided_by));
+  out->set_inconclusive_reason(to_proto(a.denial));
+  out->set_limit(to_proto(a.limit));
   for (const p4::StepCollision& c : a.collisions) {
     pb::Collision* col = out->add_collisions();
     col->set_organ(c.organ);
+    col->set_body(c.body);
     to_proto(c.point_mm, col->mutable_point());
     to_proto(c.organ_point_mm, col->mutable_organ_point());
     to_proto(c.normal, col->mutable_normal());
@@ -153,6 +206,7 @@ void to_proto(const p4::StepAnswer& a, pb::ValidateStepResponse* out) {
     col->set_first_contact_fraction(c.first_contact_fraction);
   }
   out->set_min_clearance_mm(a.min_clearance_mm);
+  out->set_min_clearance_lower_mm(a.min_clearance_lower_mm);
   out->set_clearance_organ(a.clearance_organ);
   to_proto(a.clearance_point_mm, out->mutable_clearance_point());
   pb::Correction* c = out->mutable_correction();
@@ -168,6 +222,15 @@ void to_proto(const p4::StepAnswer& a, pb::ValidateStepResponse* out) {
   for (bool e : a.correction.engaged_segments) c->add_engaged_segments(e);
   c->set_verified(a.correction.verified);
   c->set_description(a.correction.description);
+  c->set_shift_design_mm(a.correction.shift_design_mm);
+  c->set_shift_range_min_mm(a.correction.shift_range_mm[0]);
+  c->set_shift_range_max_mm(a.correction.shift_range_mm[1]);
+  for (const p4::CorrectionStep& s : a.correction.steps) {
+    pb::CorrectionStep* cs = c->add_steps();
+    to_proto(s.step, cs->mutable_step());
+    to_proto(s.state, cs->mutable_state());
+    cs->set_part_turned_over(s.part_turned_over);
+  }
   pb::StageTimes* t = out->mutable_times();
   t->set_cache_us(a.times.cache_us);
   t->set_prepare_us(a.times.prepare_us);
@@ -175,7 +238,8 @@ void to_proto(const p4::StepAnswer& a, pb::ValidateStepResponse* out) {
   t->set_broad_us(a.times.broad_us);
   t->set_hull_us(a.times.hull_us);
   t->set_narrow_us(a.times.narrow_us);
-  t->set_exact_us(a.times.exact_us);
+  t->set_static_us(a.times.static_us);
+  t->set_clearance_us(a.times.clearance_us);
   t->set_total_us(a.times.total_us);
 }
 

@@ -23,6 +23,7 @@ Result<RigidTransform> to_pose(const pb::Pose& pose, const std::string& field);
 
 void to_proto(const p4::StepAnswer& answer, pb::ValidateStepResponse* out);
 void to_proto(const p4::MachineState& state, pb::MachineState* out);
+void to_proto(const p4::BendStep& step, pb::Step* out);
 void to_proto(const Vec3& v, pb::Vec3* out);
 void to_proto(const PartRecord& record, pb::PartInfo* out);
 pb::Verdict to_proto(Verdict v);

@@ -1,5 +1,6 @@
 #include "machine_models/p4/bend_step.h"
 
+#include "kernel/tolerances.h"
 #include "machine_models/p4/content_hash.h"
 
 #include <cmath>
@@ -22,30 +23,39 @@ const char* to_string(StepKind kind) {
 std::uint64_t BendStep::hash() const {
   return ContentHash()
       .add({static_cast<double>(kind), bend_point_mm.x(), bend_point_mm.y(), bend_direction.x(), bend_direction.y(),
-            target_angle_deg, rotate_angle_deg, travel_mm.x(), travel_mm.y(), travel_mm.z(), lateral_shift_mm, retract_mm})
+            target_angle_deg, rotate_angle_deg, travel_mm.x(), travel_mm.y(), travel_mm.z(), lateral_shift_mm, retract_mm, turned_deg})
       .value();
 }
 
 Result<bool> validate_step(const MachineModel& model, const BendStep& step) {
-  if (!step.bend_point_mm.allFinite()) return invalid_argument("bend_line.point_mm", "not finite");
-  if (!step.bend_direction.allFinite() || !(step.bend_direction.norm() > 1e-9))
-    return invalid_argument("bend_line.direction", "zero-length bend line direction");
+  // Malformed or absurd values are errors naming the field; values the machine cannot reach but
+  // that make sense (an angle past the machine's range, a travel past its end) are machine limits,
+  // denied by the validator.
+  constexpr double kMax = tolerances::kMaxCoordinateMm;
+  auto sane = [&](double v) { return std::isfinite(v) && std::fabs(v) <= kMax; };
+  if (!sane(step.bend_point_mm.x()) || !sane(step.bend_point_mm.y()))
+    return invalid_argument("bend_point", "must be finite and within 1e7 mm");
+  if (!sane(step.bend_direction.x()) || !sane(step.bend_direction.y()) || !(step.bend_direction.norm() > 1e-9))
+    return invalid_argument("bend_direction", "must be a finite, non-zero direction");
   if (!std::isfinite(step.lateral_shift_mm) || std::fabs(step.lateral_shift_mm) > model.max_bend_length_mm)
     return invalid_argument("lateral_shift_mm", "must be finite and within the machine's bend length");
   if (step.kind == StepKind::kBendUp || step.kind == StepKind::kBendDown) {
-    if (!std::isfinite(step.target_angle_deg) || !(step.target_angle_deg > 0.0) ||
-        step.target_angle_deg > model.max_bend_angle_deg)
-      return invalid_argument("target_angle_deg", "must be in (0, " + std::to_string(model.max_bend_angle_deg) +
-                                                      "] degrees for this machine");
+    if (!std::isfinite(step.target_angle_deg) || !(step.target_angle_deg > 0.0) || step.target_angle_deg >= 180.0)
+      return invalid_argument("target_angle_deg", "must be a magnitude in (0, 180) degrees");
   }
+  if (!sane(step.retract_mm) || step.retract_mm < 0.0) return invalid_argument("retract_mm", "must be >= 0 and at most 1e7 mm");
+  if (!std::isfinite(step.turned_deg) || std::fabs(step.turned_deg) > 360.0)
+    return invalid_argument("turned_deg", "must be within [-360, 360] degrees");
   if (step.kind == StepKind::kRotate) {
     if (!std::isfinite(step.rotate_angle_deg) || step.rotate_angle_deg == 0.0 || std::fabs(step.rotate_angle_deg) > 360.0)
       return invalid_argument("rotate_angle_deg", "must be non-zero and within [-360, 360] degrees");
-    if (!std::isfinite(step.retract_mm) || step.retract_mm < 0.0) return invalid_argument("retract_mm", "must be >= 0");
   }
   if (step.kind == StepKind::kApproach || step.kind == StepKind::kRetract) {
-    if (!step.travel_mm.allFinite() || !(step.travel_mm.norm() > 0.0) || step.travel_mm.norm() > 10000.0)
-      return invalid_argument("travel_mm", "must be a finite, non-zero travel of at most 10 m");
+    if (!sane(step.travel_mm.x()) || !sane(step.travel_mm.y()) || !sane(step.travel_mm.z()) ||
+        !(step.travel_mm.norm() > 0.0))
+      return invalid_argument("travel", "must be a finite, non-zero travel within 1e7 mm");
+    if (step.travel_mm.z() != 0.0)
+      return invalid_argument("travel.z_mm", "must be 0: the manipulator moves the part in the table's plane");
   }
   return true;
 }

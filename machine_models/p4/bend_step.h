@@ -24,7 +24,13 @@ struct BendStep {
   double rotate_angle_deg = 90.0;  // ROTATE: about the vertical axis through the manipulator, signed
   Vec3 travel_mm = Vec3::Zero();   // APPROACH / RETRACT: how the part moves
   double lateral_shift_mm = 0.0;   // REPO: the part's shift along the bend line (machine X)
-  double retract_mm = 0.0;         // ROTATE: manipulator moved back (-Y) by this before turning
+  // ROTATE, APPROACH, RETRACT: the manipulator (and the part it holds) stands this far back (-Y)
+  // from the state's manipulator point when the motion starts: a ROTATE turns there.
+  double retract_mm = 0.0;
+  // APPROACH, RETRACT: the part and manipulator were turned by this about the vertical axis through
+  // the manipulator point (after retract_mm) since the part was placed for this bend line, e.g. a
+  // re-approach after a retracted ROTATE. [deg]
+  double turned_deg = 0.0;
 
   std::uint64_t hash() const;
 };

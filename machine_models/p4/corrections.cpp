@@ -1,140 +1,294 @@
-// Corrections the sequencer can apply after a collision, computed and then verified: the corrected
-// step is validated again and only a CLEAR answer is offered as verified.
+// Corrections the sequencer can apply after a collision. Each is a sub-sequence of steps that
+// replaces the denied one, every motion it adds included; it is offered as verified only when
+// every step of it was validated, in its own machine state, and is CLEAR.
 #include "machine_models/p4/step_validator.h"
 
 #include <algorithm>
 #include <cmath>
-#include <set>
 
 namespace gk::p4 {
+namespace {
+
+bool is_aba(const std::string& organ) { return organ.rfind("aba.segment.", 0) == 0; }
+
+// The x-range of the part's feature at a machine point: the plate nearest to it, placed for the step.
+std::pair<double, double> feature_x_range(const SheetPart& part, const BendStep& step, const Vec3& point) {
+  if (part.has_surface()) return {point.x(), point.x()};
+  const RigidTransform placement = part_placement(part, step);
+  double best = std::numeric_limits<double>::infinity();
+  std::pair<double, double> range{point.x(), point.x()};
+  for (const Plate& plate : part.plates()) {
+    const Plate placed = plate.transformed(placement);
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    Aabb box;
+    for (const Vec3& c : placed.corners()) {
+      lo = std::min(lo, c.x());
+      hi = std::max(hi, c.x());
+      box.extend(c);
+    }
+    double sq = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const double gap = std::max({0.0, box.min[k] - point[k], point[k] - box.max[k]});
+      sq += gap * gap;
+    }
+    // The blank runs under everything: prefer the smaller feature when two touch the point.
+    if (sq < best - 1e-9 || (sq <= best + 1e-9 && hi - lo < range.second - range.first)) {
+      best = sq;
+      range = {lo, hi};
+    }
+  }
+  return range;
+}
+
+}  // namespace
+
+bool StepValidator::validate_sequence(const SheetPart& part, const std::vector<CorrectionStep>& steps) {
+  const MachineState original = scene_->state();
+  bool clear = true;
+  for (const CorrectionStep& s : steps) {
+    if (!scene_->apply_state(s.state).ok()) {
+      clear = false;
+      break;
+    }
+    auto r = validate(part, s.step, false);
+    if (!r.ok() || r.value().verdict != Verdict::kClear) {
+      clear = false;
+      break;
+    }
+  }
+  (void)scene_->apply_state(original);
+  return clear;
+}
 
 void StepValidator::add_correction(const SheetPart& part, const BendStep& step, StepAnswer& answer) {
   const MachineModel& model = scene_->model();
   const MachineState original = scene_->state();
   Correction& c = answer.correction;
-  auto clear_with = [&](const BendStep& s) {
-    auto r = validate(part, s, false);
-    return r.ok() && r.value().verdict == Verdict::kClear;
+  if (answer.collisions.empty()) return;
+  const StepCollision& hit = answer.collisions.front();
+  const bool bend = step.kind == StepKind::kBendUp || step.kind == StepKind::kBendDown;
+  const bool part_hit = hit.body == "part" || hit.body == "flange";
+  auto clamp_step = [&](const BendStep& s) {
+    BendStep clamp = s;
+    clamp.kind = StepKind::kClamp;
+    return clamp;
   };
-  const std::string& organ = answer.collisions.empty() ? std::string() : answer.collisions.front().organ;
-  const bool hit_aba = organ.rfind("aba.segment.", 0) == 0;
 
-  if (step.kind == StepKind::kBendDown && !hit_aba) {
+  if (step.kind == StepKind::kBendDown && !is_aba(hit.organ) && hit.body == "flange") {
     // The flange cannot clear the machine below: turn the part over and bend it up instead.
     const Vec2 across(-step.bend_direction.y(), step.bend_direction.x());
     const SheetPart flipped = part.turned_over(step.bend_point_mm, across);
     BendStep up = step;
     up.kind = StepKind::kBendUp;
     c.kind = CorrectionKind::kFlip;
-    c.verified = [&] {
-      auto r = validate(flipped, up, false);
-      return r.ok() && r.value().verdict == Verdict::kClear;
-    }();
+    c.steps = {{up, original, true}};
+    auto r = validate(flipped, up, false);
+    c.verified = r.ok() && r.value().verdict == Verdict::kClear;
     c.description = c.verified ? "turn the part over and bend up instead" : "turning the part over does not clear it either";
     return;
   }
 
   if (step.kind == StepKind::kRotate) {
-    // Pull the manipulator back before turning: the smallest retract (to 1 mm) that clears.
+    // Pull the manipulator back, turn, and come back: the retract, the rotation and the
+    // re-approach each validated. The smallest retract (to 1 mm) whose rotation clears is found
+    // first, then grown until the three steps clear together.
     const double max_retract = original.manipulator_y_mm - model.manipulator.travel_y_mm[0];
-    BendStep s = step;
-    double lo = step.retract_mm, hi = -1.0;
-    for (double r = std::max(1.0, step.retract_mm * 2.0); r <= max_retract; r *= 2.0) {
-      s.retract_mm = r;
-      if (clear_with(s)) {
+    auto sequence = [&](double r) {
+      BendStep back = step, turn = step, again = step;
+      back.kind = StepKind::kRetract;
+      back.travel_mm = Vec3(0, -r, 0);
+      back.retract_mm = step.retract_mm;
+      turn.retract_mm = step.retract_mm + r;
+      again.kind = StepKind::kApproach;
+      again.travel_mm = Vec3(0, r, 0);
+      again.retract_mm = step.retract_mm + r;
+      again.turned_deg = step.rotate_angle_deg;
+      return std::vector<CorrectionStep>{{back, original, false}, {turn, original, false}, {again, original, false}};
+    };
+    auto turn_clears = [&](double r) {
+      BendStep turn = step;
+      turn.retract_mm = step.retract_mm + r;
+      auto a = validate(part, turn, false);
+      return a.ok() && a.value().verdict == Verdict::kClear;
+    };
+    c.kind = CorrectionKind::kRetract;
+    double lo = 0.0, hi = -1.0;
+    for (double r = 1.0; r <= max_retract; r *= 2.0) {
+      if (turn_clears(r)) {
         hi = r;
         break;
       }
       lo = r;
     }
-    if (hi < 0.0 && max_retract > lo) {
-      s.retract_mm = max_retract;
-      if (clear_with(s)) hi = max_retract;
-    }
+    if (hi < 0.0 && max_retract > lo && turn_clears(max_retract)) hi = max_retract;
     if (hi < 0.0) {
-      c.kind = CorrectionKind::kRetract;
       c.description = "no retract within the manipulator's travel clears the rotation";
       return;
     }
     while (hi - lo > 1.0) {
-      s.retract_mm = 0.5 * (lo + hi);
-      (clear_with(s) ? hi : lo) = s.retract_mm;
+      const double mid = 0.5 * (lo + hi);
+      (turn_clears(mid) ? hi : lo) = mid;
     }
-    c.kind = CorrectionKind::kRetract;
+    for (double r = std::min(std::ceil(hi), max_retract); r <= max_retract; r = std::min(max_retract, std::max(r + 1.0, r * 1.5))) {
+      std::vector<CorrectionStep> steps = sequence(r);
+      if (validate_sequence(part, steps)) {
+        c.retract_mm = r;
+        c.steps = std::move(steps);
+        c.verified = true;
+        c.description = "retract the manipulator " + std::to_string(r) + " mm, rotate, and approach again";
+        return;
+      }
+      if (r >= max_retract) break;
+    }
     c.retract_mm = std::ceil(hi);
-    s.retract_mm = c.retract_mm;
-    c.verified = clear_with(s);
-    c.description = "retract the manipulator " + std::to_string(c.retract_mm) + " mm before rotating";
+    c.steps = sequence(c.retract_mm);
+    c.description = "the rotation clears after a " + std::to_string(c.retract_mm) +
+                    " mm retract, but the retract or the re-approach does not";
     return;
   }
 
-  if (hit_aba && step.kind == StepKind::kClamp) {
-    // Disengage the segments the part runs into, as long as something still clamps.
+  if (!(is_aba(hit.organ) && part_hit && (bend || step.kind == StepKind::kClamp))) {
+    c.kind = CorrectionKind::kNone;
+    c.description = "no correction applies to " + hit.body + " against " + hit.organ + " in a " + to_string(step.kind) + " step";
+    return;
+  }
+
+  // CHANGE_ABA: disengage the segments over the features that run into the blankholder, as long
+  // as what is left still clamps the part: the new clamp and the step are validated.
+  {
     std::vector<bool> engaged = original.engaged_segments;
     if (engaged.empty()) engaged.assign(model.aba.segment_widths_mm.size(), true);
     StepAnswer current = answer;
-    for (int round = 0; round < 8 && current.verdict == Verdict::kCollision; ++round) {
+    std::vector<CorrectionStep> steps;
+    bool clear = false;
+    for (int round = 0; round < 6 && current.verdict == Verdict::kCollision; ++round) {
       bool changed = false;
       for (const StepCollision& col : current.collisions) {
-        if (col.organ.rfind("aba.segment.", 0) != 0) break;
-        const auto slot = static_cast<std::size_t>(std::stoul(col.organ.substr(12)));
-        if (engaged[slot]) {
-          engaged[slot] = false;
-          changed = true;
-        }
+        if (!is_aba(col.organ) || (col.body != "part" && col.body != "flange")) continue;
+        const auto [x0, x1] = feature_x_range(part, step, col.point_mm);
+        const double margin = options_.required_clearance_mm + 1.0;
+        for (std::size_t i = 0; i < engaged.size(); ++i)
+          if (engaged[i] && model.slot_x_max(i) > x0 - margin && model.slot_x_min(i) < x1 + margin) {
+            engaged[i] = false;
+            changed = true;
+          }
       }
       if (!changed) break;
       MachineState trial = original;
       trial.engaged_segments = engaged;
+      steps = {{clamp_step(step), trial, false}};
+      if (bend) steps.push_back({step, trial, false});
       if (!scene_->apply_state(trial).ok()) break;
-      auto r = validate(part, step, false);
+      auto clamp_answer = validate(part, clamp_step(step), false);
+      auto r = bend && clamp_answer.ok() && clamp_answer.value().verdict == Verdict::kClear ? validate(part, step, false)
+                                                                                             : clamp_answer;
+      (void)scene_->apply_state(original);
       if (!r.ok()) break;
       current = r.value();
+      clear = current.verdict == Verdict::kClear;
     }
-    (void)scene_->apply_state(original);
-    c.kind = CorrectionKind::kChangeAba;
-    c.engaged_segments = engaged;
-    c.verified = current.verdict == Verdict::kClear;
-    c.description = c.verified ? "engage a blankholder that leaves the colliding features free" : "no blankholder set found";
-    return;
+    if (clear && validate_sequence(part, steps)) {
+      c.kind = CorrectionKind::kChangeAba;
+      c.engaged_segments = engaged;
+      c.steps = std::move(steps);
+      c.verified = true;
+      c.description = "engage a blankholder that leaves the colliding features free";
+      return;
+    }
   }
 
-  if (hit_aba) {
-    // REPO: shift the part along the bend line so the colliding feature lands in a gap between
-    // engaged segments or clear of them; candidates from the slot edges, nearest first.
-    const double x = answer.collisions.empty() ? 0.0 : answer.collisions.front().point_mm.x();
-    std::set<double> shifts;
-    for (std::size_t i = 0; i < model.aba.segment_widths_mm.size(); ++i) {
-      const bool on = original.engaged_segments.empty() || original.engaged_segments[i];
-      if (on) continue;
-      shifts.insert(0.5 * (model.slot_x_min(i) + model.slot_x_max(i)) - x);  // into a gap's middle
+  // REPO: shift the part along the bend line so that the colliding feature stands under a gap of
+  // disengaged segments: the design's shift is (gap centre - feature centre); the clearing shift
+  // nearest to it is returned with the interval of clearing shifts around it. The lateral move
+  // (ABA open), the clamp and the step are validated at the new position.
+  const auto [fx0, fx1] = feature_x_range(part, step, hit.point_mm);
+  const double feature_centre = 0.5 * (fx0 + fx1), feature_width = fx1 - fx0;
+  std::vector<std::pair<double, double>> gaps;
+  for (std::size_t i = 0; i < model.aba.segment_widths_mm.size();) {
+    const bool on = original.engaged_segments.empty() || original.engaged_segments[i];
+    if (on) {
+      ++i;
+      continue;
     }
-    for (std::size_t i = 0; i < model.aba.segment_widths_mm.size(); ++i) {
-      shifts.insert(model.slot_x_min(i) - 5.0 - x);
-      shifts.insert(model.slot_x_max(i) + 5.0 - x);
-    }
-    std::vector<double> ordered(shifts.begin(), shifts.end());
-    std::sort(ordered.begin(), ordered.end(), [](double a, double b) { return std::fabs(a) < std::fabs(b); });
-    int tried = 0;
-    for (double shift : ordered) {
-      if (std::fabs(shift) < 1e-9 || ++tried > 24) continue;
-      BendStep s = step;
-      s.lateral_shift_mm = step.lateral_shift_mm + shift;
-      if (std::fabs(s.lateral_shift_mm) > model.max_bend_length_mm) continue;
-      if (clear_with(s)) {
-        c.kind = CorrectionKind::kRepoShift;
-        c.lateral_shift_mm = s.lateral_shift_mm;
-        c.verified = true;
-        c.description = "shift the part " + std::to_string(shift) + " mm along the bend line";
-        return;
+    std::size_t j = i;
+    while (j + 1 < model.aba.segment_widths_mm.size() && !(original.engaged_segments[j + 1])) ++j;
+    if (model.slot_x_max(j) - model.slot_x_min(i) >= feature_width + 2.0 * options_.required_clearance_mm)
+      gaps.emplace_back(model.slot_x_min(i), model.slot_x_max(j));
+    i = j + 1;
+  }
+  std::sort(gaps.begin(), gaps.end(), [&](const auto& a, const auto& b) {
+    return std::fabs(0.5 * (a.first + a.second) - feature_centre) < std::fabs(0.5 * (b.first + b.second) - feature_centre);
+  });
+  auto repo_steps = [&](double shift) {
+    BendStep move = step, shifted = step;
+    move.kind = StepKind::kApproach;
+    move.travel_mm = Vec3(shift, 0, 0);
+    move.retract_mm = 0.0;
+    move.turned_deg = 0.0;
+    shifted.lateral_shift_mm = step.lateral_shift_mm + shift;
+    MachineState there = original;
+    there.manipulator_x_mm += shift;
+    std::vector<CorrectionStep> steps = {{move, original, false}, {clamp_step(shifted), there, false}};
+    if (bend) steps.push_back({shifted, there, false});
+    return steps;
+  };
+  auto shifted_clears = [&](double shift) {
+    if (std::fabs(step.lateral_shift_mm + shift) > model.max_bend_length_mm) return false;
+    const std::vector<CorrectionStep> steps = repo_steps(shift);
+    return validate_sequence(part, {steps.begin() + 1, steps.end()});  // the lateral move is checked at the end
+  };
+  c.kind = CorrectionKind::kRepoShift;
+  for (std::size_t g = 0; g < gaps.size() && g < 3; ++g) {
+    const double design = 0.5 * (gaps[g].first + gaps[g].second) - feature_centre;
+    const double half = 0.5 * (gaps[g].second - gaps[g].first);
+    // The clearing shift nearest the design's: the design itself, or the nearest clearing probe.
+    double found = std::numeric_limits<double>::quiet_NaN();
+    if (shifted_clears(design)) {
+      found = design;
+    } else {
+      for (double d = 1.0; d <= half && std::isnan(found); d *= 2.0)
+        for (double sign : {-1.0, 1.0})
+          if (std::isnan(found) && shifted_clears(design + sign * d)) found = design + sign * d;
+      if (std::isnan(found)) continue;
+      // Narrow the side towards the design to 0.5 mm.
+      double clear_at = found, blocked_at = design;
+      while (std::fabs(clear_at - blocked_at) > 0.5) {
+        const double mid = 0.5 * (clear_at + blocked_at);
+        (shifted_clears(mid) ? clear_at : blocked_at) = mid;
       }
+      found = clear_at;
     }
-    c.kind = CorrectionKind::kNone;
-    c.description = "no lateral shift among the candidates clears it";
+    // The interval of clearing shifts around it, each end to 0.5 mm.
+    auto edge = [&](double sign) {
+      double inside = found, outside = found + sign * 1.0;
+      double step_mm = 1.0;
+      while (shifted_clears(outside) && std::fabs(outside - found) < 2.0 * half + 50.0) {
+        inside = outside;
+        step_mm *= 2.0;
+        outside = found + sign * step_mm;
+      }
+      while (std::fabs(outside - inside) > 0.5) {
+        const double mid = 0.5 * (inside + outside);
+        (shifted_clears(mid) ? inside : outside) = mid;
+      }
+      return inside;
+    };
+    const double lo = edge(-1.0), hi = edge(1.0);
+    std::vector<CorrectionStep> steps = repo_steps(found);
+    if (!validate_sequence(part, steps)) continue;  // the lateral move itself does not clear
+    c.lateral_shift_mm = step.lateral_shift_mm + found;
+    c.shift_design_mm = design;
+    c.shift_range_mm[0] = step.lateral_shift_mm + lo;
+    c.shift_range_mm[1] = step.lateral_shift_mm + hi;
+    c.steps = std::move(steps);
+    c.verified = true;
+    c.description = "shift the part " + std::to_string(found) + " mm along the bend line (the design's " +
+                    std::to_string(design) + " mm: gap centre - feature centre)";
     return;
   }
   c.kind = CorrectionKind::kNone;
-  c.description = "no correction applies to a collision with " + organ + " in a " + to_string(step.kind) + " step";
+  c.description = gaps.empty() ? "no gap of disengaged segments is wide enough for the feature, and no blankholder change clears it"
+                               : "no shift into a gap of disengaged segments clears it, nor does a blankholder change";
 }
 
 }  // namespace gk::p4

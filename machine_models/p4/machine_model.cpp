@@ -143,8 +143,37 @@ Result<MachineModel> parse_machine_model(const std::string& toml_text) {
     dst[0] = *(*r)[0].value<double>();
     dst[1] = *(*r)[1].value<double>();
   }
+  if (!(m.manipulator.travel_x_mm[1] >= m.manipulator.travel_x_mm[0]) || !std::isfinite(m.manipulator.travel_x_mm[0]) ||
+      !std::isfinite(m.manipulator.travel_x_mm[1]))
+    return invalid_argument("manipulator.travel_x_mm", "must be finite with max >= min");
+  if (!(m.manipulator.travel_y_mm[1] >= m.manipulator.travel_y_mm[0]) || !std::isfinite(m.manipulator.travel_y_mm[0]) ||
+      !std::isfinite(m.manipulator.travel_y_mm[1]))
+    return invalid_argument("manipulator.travel_y_mm", "must be finite with max >= min");
+  GK_READ(m.manipulator.cup_half_width_mm, manip, "cup_half_width_mm", positive)
+  GK_READ(m.manipulator.cup_height_mm, manip, "cup_height_mm", positive)
+  GK_READ(m.manipulator.frame_thickness_mm, manip, "frame_thickness_mm", positive)
   GK_READ(m.manipulator.rotator_radius_mm, manip, "rotator_radius_mm", positive)
   GK_READ(m.manipulator.rotator_height_mm, manip, "rotator_height_mm", positive)
+  {
+    const toml::array* half = (*manip)["frame_half_size_mm"].as_array();
+    if (!half || half->size() != 2 || !(*half)[0].value<double>() || !(*half)[1].value<double>() ||
+        !(*(*half)[0].value<double>() > 0.0) || !(*(*half)[1].value<double>() > 0.0))
+      return invalid_argument("manipulator.frame_half_size_mm", "must be [half_x, half_y], both positive");
+    m.manipulator.frame_half_size_mm = Vec2(*(*half)[0].value<double>(), *(*half)[1].value<double>());
+    const toml::array* cups = (*manip)["cup_offsets_mm"].as_array();
+    if (!cups || cups->empty()) return invalid_argument("manipulator.cup_offsets_mm", "needs at least one cup [x, y]");
+    for (std::size_t i = 0; i < cups->size(); ++i) {
+      const toml::array* xy = (*cups)[i].as_array();
+      const std::string f = "manipulator.cup_offsets_mm[" + std::to_string(i) + "]";
+      if (!xy || xy->size() != 2 || !(*xy)[0].value<double>() || !(*xy)[1].value<double>())
+        return invalid_argument(f, "must be [x, y]");
+      const Vec2 c(*(*xy)[0].value<double>(), *(*xy)[1].value<double>());
+      if (!c.allFinite() || std::fabs(c.x()) > m.manipulator.frame_half_size_mm.x() ||
+          std::fabs(c.y()) > m.manipulator.frame_half_size_mm.y())
+        return invalid_argument(f, "must lie under the gripper frame");
+      m.manipulator.cup_offsets_mm.push_back(c);
+    }
+  }
 #undef GK_READ
   return m;
 }

@@ -26,11 +26,18 @@ struct AbaSpec {
   double retract_z_mm = 0.0;         // how far a disengaged segment rises
 };
 
+// The manipulator, from the sheet's upper face up: suction cups, the gripper frame on them, the
+// rotator column on the frame's centre. Offsets are in the gripper's frame (x along the bend line).
 struct ManipulatorSpec {
   double travel_x_mm[2] = {0, 0};
   double travel_y_mm[2] = {0, 0};
+  double cup_half_width_mm = 0.0;
+  double cup_height_mm = 0.0;
+  std::vector<Vec2> cup_offsets_mm;
+  Vec2 frame_half_size_mm = Vec2::Zero();
+  double frame_thickness_mm = 0.0;
   double rotator_radius_mm = 0.0;
-  double rotator_height_mm = 0.0;
+  double rotator_height_mm = 0.0;  // above the gripper frame
 };
 
 struct MachineModel {

@@ -71,15 +71,17 @@ Aabb swept_bounds(const std::vector<MovingBody>& bodies, const Motion& motion, d
 
 namespace {
 
-// Is the convex organ farther than `bound` from the convex hull? Separating-axis test over both
-// shapes' face normals: a gap along any unit axis is a lower bound of their distance, so a gap
-// beyond the bound proves them apart (and rules out either lying inside the other). Edge-edge axes
-// are not tried: an organ they alone would separate goes on to the narrow phase.
-bool hull_clears(const HullPolytope& hull, const SweepOrgan& organ, double bound) {
+// The largest gap between the convex organ and the convex hull along the face normals of both
+// (negative when none separates them): a gap along any unit axis is a lower bound of their
+// distance, so a gap beyond a bound proves them apart (and rules out either lying inside the
+// other). Edge-edge axes are not tried: an organ they alone would separate goes on to the narrow
+// phase.
+double hull_gap(const HullPolytope& hull, const SweepOrgan& organ, double bound) {
   const TriangleMesh& om = organ.mesh->mesh();
   std::vector<Vec3> organ_points;
   organ_points.reserve(om.vertices().size());
   for (const Vec3& v : om.vertices()) organ_points.push_back(organ.pose.apply(v));
+  double best = -std::numeric_limits<double>::infinity();
   auto separated_along = [&](const Vec3& axis) {
     double hull_lo = std::numeric_limits<double>::infinity(), hull_hi = -hull_lo;
     for (const Vec3& v : hull.corners) {
@@ -93,19 +95,20 @@ bool hull_clears(const HullPolytope& hull, const SweepOrgan& organ, double bound
       organ_lo = std::min(organ_lo, p);
       organ_hi = std::max(organ_hi, p);
     }
-    return organ_lo - hull_hi > bound || hull_lo - organ_hi > bound;
+    best = std::max(best, std::max(organ_lo - hull_hi, hull_lo - organ_hi));
+    return best > bound;
   };
   for (std::size_t t = 0; t < om.triangle_count(); ++t) {
     const Triangle tri = om.triangle(t);
     const Vec3 n = organ.pose.apply_direction((tri[1] - tri[0]).cross(tri[2] - tri[0]));
-    if (n.norm() > 0.0 && separated_along(n.normalized())) return true;
+    if (n.norm() > 0.0) separated_along(n.normalized());
   }
   for (const auto& f : hull.faces) {
     const Vec3& a = hull.corners[f[0]];
     const Vec3 n = (hull.corners[f[1]] - a).cross(hull.corners[f[2]] - a);
-    if (n.norm() > 0.0 && separated_along(n.normalized())) return true;
+    if (n.norm() > 0.0) separated_along(n.normalized());
   }
-  return false;
+  return best;
 }
 
 // The prism over the 2D convex hull of the points projected along the rotation axis, spanning
@@ -176,6 +179,7 @@ Result<HullLodResult> hull_lod(const std::vector<MovingBody>& bodies, const Moti
   out.samples = sample_count(motion, max_sample_step_rad);
   out.sagitta_mm = sagitta(bodies, motion, out.samples);
   std::vector<char> cleared(organs.size(), 1);
+  out.lower_bound_mm.assign(organs.size(), std::numeric_limits<double>::infinity());
   // One hull per body: the union of each body's sampled positions, inflated by the sagitta.
   for (const MovingBody& body : bodies) {
     const std::vector<MovingBody> one = {body};
@@ -185,11 +189,18 @@ Result<HullLodResult> hull_lod(const std::vector<MovingBody>& bodies, const Moti
       std::fill(cleared.begin(), cleared.end(), 0);
       continue;
     }
-    for (std::size_t i = 0; i < organs.size(); ++i)
-      if (cleared[i]) cleared[i] = hull_clears(hull.value(), organs[i], out.sagitta_mm + clearance_mm) ? 1 : 0;
+    for (std::size_t i = 0; i < organs.size(); ++i) {
+      if (!cleared[i]) continue;
+      const double gap = hull_gap(hull.value(), organs[i], out.sagitta_mm + clearance_mm) - out.sagitta_mm;
+      cleared[i] = gap > clearance_mm ? 1 : 0;
+      out.lower_bound_mm[i] = std::min(out.lower_bound_mm[i], gap);
+    }
   }
   for (std::size_t i = 0; i < organs.size(); ++i)
-    if (!cleared[i]) out.remaining.push_back(static_cast<int>(i));
+    if (!cleared[i]) {
+      out.remaining.push_back(static_cast<int>(i));
+      out.lower_bound_mm[i] = 0.0;
+    }
   return out;
 }
 
@@ -280,41 +291,69 @@ std::pair<double, double> axial_extent(const std::vector<Vec3>& points, const Mo
 
 Result<SweepOutcome> conservative_advance(const std::vector<MovingBody>& bodies, const Motion& motion,
                                           const std::vector<SweepOrgan>& organs, const AdvanceOptions& options) {
+  std::vector<SweepPair> pairs;
+  for (const SweepOrgan& organ : organs)
+    for (const MovingBody& body : bodies) pairs.push_back({&body, organ});
+  auto out = conservative_advance(pairs, motion, options);
+  if (!out.ok()) return out;
+  // Report organ indices, as this overload promises.
+  const auto per_organ = static_cast<int>(bodies.size());
+  if (out.value().organ >= 0) out.value().organ /= per_organ;
+  if (out.value().min_clearance_organ >= 0) out.value().min_clearance_organ /= per_organ;
+  return out;
+}
+
+Result<SweepOutcome> conservative_advance(const std::vector<SweepPair>& pairs, const Motion& motion,
+                                          const AdvanceOptions& options) {
   SweepOutcome out;
   // Each (body, organ) pair advances on its own, at the body's own speed: a far pair is settled
   // in one query, a near one takes the small steps it needs. The first contact is the answer.
   // Along a rotation's axis nothing moves: a body and an organ whose extents along the axis lie
   // apart by more than the required clearance can never meet, and need no query at all.
+  std::vector<const MovingBody*> bodies;
+  for (const SweepPair& p : pairs)
+    if (std::find(bodies.begin(), bodies.end(), p.body) == bodies.end()) bodies.push_back(p.body);
   std::vector<std::pair<double, double>> body_axial(bodies.size());
-  for (std::size_t b = 0; b < bodies.size(); ++b) body_axial[b] = axial_extent(bodies[b].points, motion);
-  // Per-body hull filter: which (body, organ) pairs the body's own sweep hull already clears.
-  std::vector<std::vector<char>> cleared(bodies.size(), std::vector<char>(organs.size(), 0));
+  for (std::size_t b = 0; b < bodies.size(); ++b) body_axial[b] = axial_extent(bodies[b]->points, motion);
+  // Per-body hull filter: which pairs the body's own sweep hull already clears.
+  std::vector<char> cleared(pairs.size(), 0);
+  // What a skipped pair is proven to keep: more than the required clearance.
+  out.pair_lower_mm.assign(pairs.size(), options.required_clearance_mm);
   if (options.body_hull_step_rad > 0.0) {
-    for (std::size_t b = 0; b < bodies.size(); ++b) {
-      auto lod = hull_lod({bodies[b]}, motion, organs, options.required_clearance_mm, options.body_hull_step_rad);
+    for (const MovingBody* body : bodies) {
+      std::vector<SweepOrgan> organs;
+      std::vector<std::size_t> which;
+      for (std::size_t i = 0; i < pairs.size(); ++i)
+        if (pairs[i].body == body) {
+          organs.push_back(pairs[i].organ);
+          which.push_back(i);
+        }
+      auto lod = hull_lod({*body}, motion, organs, options.required_clearance_mm, options.body_hull_step_rad);
       if (!lod.ok()) return lod.error();
-      std::fill(cleared[b].begin(), cleared[b].end(), 1);
-      for (int i : lod.value().remaining) cleared[b][i] = 0;
+      for (std::size_t k = 0; k < which.size(); ++k) cleared[which[k]] = 1;
+      for (int k : lod.value().remaining) cleared[which[k]] = 0;
     }
   }
-  for (std::size_t i = 0; i < organs.size(); ++i)
-  for (std::size_t b = 0; b < bodies.size(); ++b) {
-    const MovingBody& body = bodies[b];
-    if (cleared[b][i]) continue;
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    const MovingBody& body = *pairs[i].body;
+    const SweepOrgan& organ = pairs[i].organ;
+    if (cleared[i]) continue;
     if (motion.rotation) {
-      const Aabb& lb = organs[i].mesh->root_bounds();
+      const std::size_t b = static_cast<std::size_t>(std::find(bodies.begin(), bodies.end(), &body) - bodies.begin());
+      const Aabb& lb = organ.mesh->root_bounds();
       std::vector<Vec3> corners;
       for (int k = 0; k < 8; ++k)
-        corners.push_back(organs[i].pose.apply(Vec3((k & 1) ? lb.max.x() : lb.min.x(), (k & 2) ? lb.max.y() : lb.min.y(),
-                                                    (k & 4) ? lb.max.z() : lb.min.z())));
+        corners.push_back(organ.pose.apply(Vec3((k & 1) ? lb.max.x() : lb.min.x(), (k & 2) ? lb.max.y() : lb.min.y(),
+                                                (k & 4) ? lb.max.z() : lb.min.z())));
       const auto organ_axial = axial_extent(corners, motion);
       if (organ_axial.first > body_axial[b].second + options.required_clearance_mm + options.contact_resolution_mm ||
           body_axial[b].first > organ_axial.second + options.required_clearance_mm + options.contact_resolution_mm)
         continue;
     }
-    auto one = advance_one(body, motion, organs[i], options, out.collided ? out.contact_s : 1.0);
+    auto one = advance_one(body, motion, organ, options, out.collided ? out.contact_s : 1.0);
     if (!one.ok()) return one.error();
     const OrganAdvance& a = one.value();
+    out.pair_lower_mm[i] = a.collided ? 0.0 : a.certified;
     out.steps += a.steps;
     if (a.budget_exceeded) out.budget_exceeded = true;
     if (a.collided && (!out.collided || a.contact_s < out.contact_s)) {
@@ -333,6 +372,56 @@ Result<SweepOutcome> conservative_advance(const std::vector<MovingBody>& bodies,
     }
     out.certified_clearance_mm = std::min(out.certified_clearance_mm, a.certified);
   }
+  return out;
+}
+
+Result<ClearanceBracket> clearance_bracket(const MovingBody& body, const Motion& motion, const SweepOrgan& organ,
+                                           double window_mm, double tolerance_mm, int max_queries) {
+  const double rate = motion.rate(body.points);
+  ClearanceBracket out;
+  // d(s), capped at the window: a query that finds nothing within it proves d > window.
+  auto measure = [&](double s, double& d) -> Result<bool> {
+    DistanceRequest req;
+    req.upper_bound_mm = std::min(window_mm, out.upper_mm);
+    auto r = distance(*body.mesh, motion.at(s), *organ.mesh, organ.pose, req);
+    if (!r.ok()) return r.error();
+    ++out.queries;
+    d = r.value().found ? r.value().distance_mm : req.upper_bound_mm;
+    if (r.value().found && r.value().distance_mm < out.upper_mm) {
+      out.upper_mm = r.value().distance_mm;
+      out.at_s = s;
+      out.point_on_body = r.value().point_a;
+    }
+    return true;
+  };
+  struct Interval {
+    double s0, s1, d0, d1;
+    double lower(double rate) const { return std::max(0.0, 0.5 * (d0 + d1 - rate * (s1 - s0))); }
+  };
+  double d0 = 0.0, d1 = 0.0;
+  if (auto m = measure(0.0, d0); !m.ok()) return m.error();
+  if (auto m = measure(1.0, d1); !m.ok()) return m.error();
+  std::vector<Interval> open = {{0.0, 1.0, d0, d1}};
+  if (rate == 0.0) open.clear();  // nothing moves: the one measurement is the answer
+  out.lower_mm = std::min(d0, d1);
+  while (!open.empty()) {
+    // Split the interval with the smallest lower bound, until it is close enough to the best
+    // measured value, far enough, or the budget is spent.
+    auto worst = std::min_element(open.begin(), open.end(),
+                                  [&](const Interval& a, const Interval& b) { return a.lower(rate) < b.lower(rate); });
+    const double lo = worst->lower(rate);
+    if (lo >= window_mm || out.upper_mm - lo <= tolerance_mm || out.queries >= max_queries) break;
+    const Interval iv = *worst;
+    open.erase(worst);
+    const double mid = 0.5 * (iv.s0 + iv.s1);
+    double dm = 0.0;
+    if (auto m = measure(mid, dm); !m.ok()) return m.error();
+    open.push_back({iv.s0, mid, iv.d0, dm});
+    open.push_back({mid, iv.s1, dm, iv.d1});
+  }
+  double lower = std::min(out.upper_mm, window_mm);
+  for (const Interval& iv : open) lower = std::min(lower, iv.lower(rate));
+  out.lower_mm = lower;
   return out;
 }
 

@@ -10,6 +10,7 @@
 #include "kernel/mesh_bvh.h"
 #include "kernel/rigid_transform.h"
 #include "machine_models/p4/machine_scene.h"
+#include "machine_models/p4/sheet_part.h"
 
 #include <memory>
 #include <vector>
@@ -33,6 +34,7 @@ struct Motion {
 struct MovingBody {
   std::shared_ptr<MeshBvh> mesh;
   std::vector<Vec3> points;  // its vertices (the hull is taken over them)
+  std::vector<Plate> plates; // the boxes it is made of (empty for a surface), for penetration depths
 };
 
 // An organ as the sweep sees it: its mesh and its pose for this step.
@@ -44,6 +46,8 @@ struct SweepOrgan {
 
 struct HullLodResult {
   std::vector<int> remaining;  // indices into the organ list that the hull could not clear
+  // Per organ: a proven lower bound of its distance from the sweep (0 for those remaining). [mm]
+  std::vector<double> lower_bound_mm;
   double sagitta_mm = 0.0;
   int samples = 0;
 };
@@ -59,15 +63,18 @@ struct SweepOutcome {
   bool collided = false;
   bool budget_exceeded = false;   // too many advancement steps: the answer is inconclusive
   double contact_s = 1.0;         // first parameter where the clearance fell to the required one
-  int organ = -1;                 // index into the organ list of the organ reached
+  int organ = -1;                 // index into the organ (or pair) list of the organ reached
   Vec3 point_on_body = Vec3::Zero(), point_on_organ = Vec3::Zero();  // machine coordinates
   Vec3 normal = Vec3::Zero();     // at contact: from the organ towards the body, before they met
   double min_clearance_mm = std::numeric_limits<double>::infinity();  // smallest sampled clearance
   double certified_clearance_mm = std::numeric_limits<double>::infinity();  // a proven lower bound
-  int min_clearance_organ = -1;
+  int min_clearance_organ = -1;   // index into the organ (or pair) list
   double min_clearance_s = 0.0;
   Vec3 min_clearance_point = Vec3::Zero();
   int steps = 0;
+  // Per pair (the pairs overload): a proven lower bound of that pair's clearance over the motion
+  // (up to where its advancement stopped). [mm]
+  std::vector<double> pair_lower_mm;
 };
 
 struct AdvanceOptions {
@@ -84,5 +91,30 @@ struct AdvanceOptions {
 
 Result<SweepOutcome> conservative_advance(const std::vector<MovingBody>& bodies, const Motion& motion,
                                           const std::vector<SweepOrgan>& organs, const AdvanceOptions& options);
+
+// One body against one organ: the sweep checks exactly the pairs it is given (a step decides which
+// version of a body meets which organ, e.g. only what hangs below a support's top face).
+struct SweepPair {
+  const MovingBody* body = nullptr;
+  SweepOrgan organ;
+};
+// The same advancement over explicit pairs; the outcome's organ indices are pair indices.
+Result<SweepOutcome> conservative_advance(const std::vector<SweepPair>& pairs, const Motion& motion,
+                                          const AdvanceOptions& options);
+
+// The smallest clearance over the whole motion between one body and one organ, bracketed:
+// `lower_mm` is proven (the distance is 1-Lipschitz in the points' positions, which move at most
+// `rate` per unit of s), `upper_mm` was measured at `at_s`. Intervals are split until the bracket
+// is narrower than tolerance_mm, the lower bound reaches window_mm (farther does not matter) or
+// max_queries distance queries were made.
+struct ClearanceBracket {
+  double lower_mm = 0.0;
+  double upper_mm = std::numeric_limits<double>::infinity();
+  double at_s = 0.0;
+  Vec3 point_on_body = Vec3::Zero();
+  int queries = 0;
+};
+Result<ClearanceBracket> clearance_bracket(const MovingBody& body, const Motion& motion, const SweepOrgan& organ,
+                                           double window_mm, double tolerance_mm, int max_queries);
 
 }  // namespace gk::p4

@@ -1,5 +1,6 @@
 #include "machine_models/p4/sheet_part.h"
 
+#include "kernel/tolerances.h"
 #include "machine_models/p4/content_hash.h"
 
 #include <cmath>
@@ -50,7 +51,8 @@ Plate Plate::transformed(const RigidTransform& t) const {
 Result<SheetPart> SheetPart::create(const SheetPartSpec& spec) {
   for (auto [value, field] : {std::pair{spec.width_mm, "width_mm"}, std::pair{spec.depth_mm, "depth_mm"},
                               std::pair{spec.thickness_mm, "thickness_mm"}})
-    if (!(value > 0.0) || !std::isfinite(value)) return invalid_argument(field, "must be a positive length");
+    if (!(value > 0.0) || !(value <= tolerances::kMaxCoordinateMm))
+      return invalid_argument(field, "must be a positive length of at most 1e7 mm");
   SheetPart part;
   part.thickness_ = spec.thickness_mm;
   const double t = spec.thickness_mm;
@@ -58,7 +60,10 @@ Result<SheetPart> SheetPart::create(const SheetPartSpec& spec) {
   for (std::size_t i = 0; i < spec.flanges.size(); ++i) {
     const FlangeSpec& f = spec.flanges[i];
     const std::string field = "flanges[" + std::to_string(i) + "]";
-    if (!(f.height_mm > 0.0) || !std::isfinite(f.height_mm)) return invalid_argument(field + ".height_mm", "must be positive");
+    if (!(f.height_mm > 0.0) || !(f.height_mm <= tolerances::kMaxCoordinateMm))
+      return invalid_argument(field + ".height_mm", "must be positive and at most 1e7 mm");
+    if (!std::isfinite(f.start_mm) || !std::isfinite(f.length_mm))
+      return invalid_argument(field + ".start_mm", "start_mm and length_mm must be finite");
     if (!std::isfinite(f.angle_deg) || f.angle_deg == 0.0 || std::fabs(f.angle_deg) >= 180.0)
       return invalid_argument(field + ".angle_deg", "must be non-zero and within (-180, 180) degrees");
     const bool along_x = f.side == Side::kYMin || f.side == Side::kYMax;
@@ -91,7 +96,8 @@ Result<SheetPart> SheetPart::create(const SheetPartSpec& spec) {
     if (!(tab.x_max_mm > tab.x_min_mm) || tab.x_min_mm < 0.0 || tab.x_max_mm > spec.width_mm)
       return invalid_argument(field + ".x_mm", "must be an interval inside the blank's width");
     if (!(tab.y_mm >= 0.0) || tab.y_mm + t > spec.depth_mm) return invalid_argument(field + ".y_mm", "must lie on the blank");
-    if (!(tab.height_mm > 0.0) || !std::isfinite(tab.height_mm)) return invalid_argument(field + ".height_mm", "must be positive");
+    if (!(tab.height_mm > 0.0) || !(tab.height_mm <= tolerances::kMaxCoordinateMm))
+      return invalid_argument(field + ".height_mm", "must be positive and at most 1e7 mm");
     part.plates_.push_back({Vec3(tab.x_min_mm, tab.y_mm, t),
                             {Vec3(tab.x_max_mm - tab.x_min_mm, 0, 0), Vec3(0, t, 0), Vec3(0, 0, tab.height_mm)},
                             "tab." + std::to_string(i)});
@@ -109,8 +115,9 @@ SheetPart SheetPart::from_plates(std::vector<Plate> plates, double thickness_mm)
 }
 
 Result<SheetPart> SheetPart::from_surface(TriangleMesh surface, double thickness_mm, double deflection_mm) {
-  if (!(thickness_mm > 0.0) || !std::isfinite(thickness_mm)) return invalid_argument("thickness_mm", "must be a positive length");
-  if (!(deflection_mm >= 0.0) || !std::isfinite(deflection_mm)) return invalid_argument("deflection_mm", "must be >= 0");
+  if (!(thickness_mm > 0.0) || !(thickness_mm <= tolerances::kMaxCoordinateMm))
+    return invalid_argument("thickness_mm", "must be a positive length of at most 1e7 mm");
+  if (!(deflection_mm >= 0.0) || !(deflection_mm <= 1000.0)) return invalid_argument("deflection_mm", "must be in [0, 1000] mm");
   SheetPart part;
   part.thickness_ = thickness_mm;
   part.deflection_ = deflection_mm;
@@ -146,7 +153,7 @@ std::vector<Vec3> clip_polygon(const std::vector<Vec3>& poly, const Vec3& n, con
 
 Result<bool> SheetPart::split_surface(const Vec2& point, const Vec2& direction, double offset_mm,
                                       std::vector<Vec3>& moving_vertices, std::vector<TriangleMesh::Face>& moving_faces,
-                                      bool& fixed_side_empty) const {
+                                      std::vector<Vec3>& fixed_vertices, std::vector<TriangleMesh::Face>& fixed_faces) const {
   if (!surface_) return invalid_argument("part", "has no surface");
   if (!point.allFinite()) return invalid_argument("bend_line.point", "not finite");
   if (!direction.allFinite() || !(direction.norm() > 0.0)) return invalid_argument("bend_line.direction", "must be a non-zero vector");
@@ -154,15 +161,18 @@ Result<bool> SheetPart::split_surface(const Vec2& point, const Vec2& direction, 
   const Vec3 n(-d.y(), d.x(), 0.0), q(point.x(), point.y(), 0.0);
   moving_vertices.clear();
   moving_faces.clear();
-  fixed_side_empty = true;
+  fixed_vertices.clear();
+  fixed_faces.clear();
+  auto add = [](const std::vector<Vec3>& kept, std::vector<Vec3>& vertices, std::vector<TriangleMesh::Face>& faces) {
+    if (kept.size() < 3) return;
+    const auto base = static_cast<std::uint32_t>(vertices.size());
+    vertices.insert(vertices.end(), kept.begin(), kept.end());
+    for (std::uint32_t k = 1; k + 1 < kept.size(); ++k) faces.push_back({base, base + k, base + k + 1});
+  };
   for (std::size_t t = 0; t < surface_->triangle_count(); ++t) {
     const Triangle tri = surface_->triangle(t);
-    if (n.dot(tri[0] - q) < 0.0 || n.dot(tri[1] - q) < 0.0 || n.dot(tri[2] - q) < 0.0) fixed_side_empty = false;
-    const std::vector<Vec3> kept = clip_polygon({tri[0], tri[1], tri[2]}, n, q, offset_mm);
-    if (kept.size() < 3) continue;
-    const auto base = static_cast<std::uint32_t>(moving_vertices.size());
-    moving_vertices.insert(moving_vertices.end(), kept.begin(), kept.end());
-    for (std::uint32_t k = 1; k + 1 < kept.size(); ++k) moving_faces.push_back({base, base + k, base + k + 1});
+    add(clip_polygon({tri[0], tri[1], tri[2]}, n, q, offset_mm), moving_vertices, moving_faces);
+    add(clip_polygon({tri[0], tri[1], tri[2]}, -n, q, 0.0), fixed_vertices, fixed_faces);
   }
   return true;
 }

@@ -78,10 +78,11 @@ class SheetPart {
   Result<bool> split(const Vec2& point, const Vec2& direction, double offset_mm, std::vector<Plate>& moving,
                      std::vector<Plate>& fixed) const;
 
-  // The same split for a part given by its surface: triangles are clipped at the plane(s); the
-  // moving side comes back as a triangle soup (empty when nothing lies there).
+  // The same split for a part given by its surface: triangles are clipped at the plane(s); each
+  // side comes back as a triangle soup (empty when nothing lies there).
   Result<bool> split_surface(const Vec2& point, const Vec2& direction, double offset_mm, std::vector<Vec3>& moving_vertices,
-                             std::vector<TriangleMesh::Face>& moving_faces, bool& fixed_side_empty) const;
+                             std::vector<TriangleMesh::Face>& moving_faces, std::vector<Vec3>& fixed_vertices,
+                             std::vector<TriangleMesh::Face>& fixed_faces) const;
 
   // The part turned over (180 degrees about the in-plane axis through `point` along `axis`),
   // resting again on Z = 0.

@@ -1,16 +1,16 @@
 #include "machine_models/p4/step_validator.h"
 
 #include "kernel/mesh_bvh.h"
-#include "kernel/mesh_collision.h"
 #include "kernel/mesh_distance.h"
+#include "machine_models/p4/contact_layers.h"
+#include "machine_models/p4/convex_polytope.h"
+#include "machine_models/p4/manipulator_geometry.h"
 #include "machine_models/p4/organ_geometry.h"
-#include "machine_models/p4/plate_shapes.h"
-#include "occt_adapters/exact_measures.h"
-#include "occt_adapters/shape_builders.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 namespace gk::p4 {
 namespace {
@@ -27,29 +27,14 @@ std::uint64_t mix(std::uint64_t h, std::uint64_t v) {
 
 bool is_bend(StepKind k) { return k == StepKind::kBendUp || k == StepKind::kBendDown; }
 
-// How deep the bodies' vertices (moved by body_pose) reach into the organ's prism, 0 if outside.
-double deepest_inside(const Organ& organ, const RigidTransform& organ_pose, const std::vector<MovingBody>& bodies,
-                      const RigidTransform& body_pose) {
-  const RigidTransform to_organ = organ_pose.inverse() * body_pose;
-  double depth = 0.0;
-  for (const MovingBody& b : bodies)
-    for (const Vec3& p : b.points)
-      depth = std::max(depth, depth_inside_prism(organ.profile_yz, organ.x_min, organ.x_max, to_organ.apply(p)));
-  return depth;
-}
-
-// The B-Rep distance between the plates (moved by `motion_pose`) and the organ's prism.
-Result<double> exact_clearance(const std::vector<Plate>& plates, const RigidTransform& motion_pose, const Organ& organ,
-                               const RigidTransform& organ_pose) {
-  auto prism = occt::make_prism_yz(organ.profile_yz, organ.x_min, organ.x_max);
-  if (!prism.ok()) return prism.error();
-  auto placed_organ = occt::place(prism.value(), organ_pose);
-  if (!placed_organ.ok()) return placed_organ.error();
-  auto compound = plates_shape(plates, motion_pose);
-  if (!compound.ok()) return compound.error();
-  auto d = occt::exact_distance(compound.value(), placed_organ.value());
-  if (!d.ok()) return d.error();
-  return d.value().distance_mm;
+Result<MovingBody> make_body(TriangleMesh mesh, std::vector<Plate> plates) {
+  MovingBody body;
+  body.points = mesh.vertices();
+  auto bvh = MeshBvh::build(std::make_shared<const TriangleMesh>(std::move(mesh)));
+  if (!bvh.ok()) return bvh.error();
+  body.mesh = bvh.value();
+  body.plates = std::move(plates);
+  return body;
 }
 
 // The plate cut across its edge that runs most nearly away from the rotation axis, into bands of
@@ -87,25 +72,33 @@ std::vector<Plate> radial_bands(const Plate& plate, const Motion& motion) {
   return bands;
 }
 
-// The lowest Z reached by any body corner while rotating about an axis parallel to X. A box's
-// lowest point over a rotation is at a corner, and each corner's lowest point is on its arc.
-double lowest_point_of_rotation(const std::vector<MovingBody>& bodies, const Motion& motion) {
+// The lowest Z reached by any body point while rotating about an axis parallel to X: each point's
+// lowest position is on its arc.
+double lowest_point_of_rotation(const std::vector<Vec3>& points, const Motion& motion) {
   double lowest = std::numeric_limits<double>::infinity();
   const double a0 = std::min(0.0, motion.angle_rad), a1 = std::max(0.0, motion.angle_rad);
-  for (const MovingBody& b : bodies)
-    for (const Vec3& p : b.points) {
-      const double y = p.y() - motion.axis_point.y(), z = p.z() - motion.axis_point.z();
-      const double r = std::hypot(y, z), phi = std::atan2(z, y);
-      // z(angle) = r sin(phi + angle) over angle in [a0, a1]: its minimum is at an end, or at
-      // phi + angle = -pi/2 (mod 2 pi) when that lies inside.
-      double m = std::min(r * std::sin(phi + a0), r * std::sin(phi + a1));
-      for (double k = -2.0; k <= 2.0; k += 1.0) {
-        const double at = -0.5 * kPi + 2.0 * kPi * k - phi;
-        if (at >= a0 && at <= a1) m = -r;
-      }
-      lowest = std::min(lowest, motion.axis_point.z() + m);
+  for (const Vec3& p : points) {
+    const double y = p.y() - motion.axis_point.y(), z = p.z() - motion.axis_point.z();
+    const double r = std::hypot(y, z), phi = std::atan2(z, y);
+    // z(angle) = r sin(phi + angle) over angle in [a0, a1]: its minimum is at an end, or at
+    // phi + angle = -pi/2 (mod 2 pi) when that lies inside.
+    double m = std::min(r * std::sin(phi + a0), r * std::sin(phi + a1));
+    for (double k = -2.0; k <= 2.0; k += 1.0) {
+      const double at = -0.5 * kPi + 2.0 * kPi * k - phi;
+      if (at >= a0 && at <= a1) m = -r;
     }
+    lowest = std::min(lowest, motion.axis_point.z() + m);
+  }
   return lowest;
+}
+
+double box_distance(const Aabb& a, const Aabb& b) {
+  double sq = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    const double gap = std::max({0.0, a.min[k] - b.max[k], b.min[k] - a.max[k]});
+    sq += gap * gap;
+  }
+  return std::sqrt(sq);
 }
 
 }  // namespace
@@ -113,11 +106,21 @@ double lowest_point_of_rotation(const std::vector<MovingBody>& bodies, const Mot
 const char* to_string(Stage stage) {
   switch (stage) {
     case Stage::kCache: return "cache";
+    case Stage::kLimits: return "limits";
+    case Stage::kStatic: return "static";
     case Stage::kGlobalBox: return "global_box";
     case Stage::kBroadPhase: return "broad_phase";
     case Stage::kHullLod: return "hull_lod";
     case Stage::kNarrow: return "narrow";
-    case Stage::kExact: return "exact";
+  }
+  return "?";
+}
+
+const char* to_string(DenialReason reason) {
+  switch (reason) {
+    case DenialReason::kNone: return "NONE";
+    case DenialReason::kMachineLimit: return "MACHINE_LIMIT";
+    case DenialReason::kSweepBudget: return "SWEEP_BUDGET";
   }
   return "?";
 }
@@ -133,20 +136,45 @@ const char* to_string(CorrectionKind kind) {
   return "?";
 }
 
-// What a step needs before any organ is looked at: the moving bodies in machine coordinates, the
-// motion, and which organs take part. Cached per part, step and (for manipulator moves) state.
+// One rigid group of the step, in machine coordinates at the start of the motion.
+struct StepBody {
+  std::string name;                // "part", "flange", "manipulator"
+  MovingBody whole;
+  std::vector<MovingBody> pieces;  // for advancement: radial bands of the plates (or the whole body)
+  bool moves = false;              // swept by the motion; otherwise held still through the step
+  bool rests_on_supports = false;  // its lower face lies on the supports' top faces
+  bool pressed_by_aba = false;     // its upper face is pressed by the engaged segments
+  // The body outside the intended contact layers: what hangs below a support's top face (one per
+  // support top height) and what stands above the pressing plane. Empty: nothing there.
+  std::vector<std::pair<double, std::optional<MovingBody>>> below_support;
+  std::optional<MovingBody> above_pressing;
+};
+
+// Something a body must keep clear of, placed for the step: an organ, or (in a bend) a plate of
+// the manipulator, which the flange must not sweep through.
+struct Obstacle {
+  std::string name;
+  const MeshBvh* mesh = nullptr;
+  RigidTransform pose;
+  Aabb box;
+  ConvexPolytope shape;          // machine coordinates
+  bool support = false;          // a support's top face carries the part
+  bool pressing = false;         // an engaged ABA segment pressing the part (CLAMP, bends)
+  double top_z = 0.0;            // supports: the top face's height
+};
+
+// What a step needs before any organ is looked at. Cached per part, step and state.
 struct StepValidator::Prepared {
-  std::vector<MovingBody> bodies;  // one per rigid group (part, manipulator): for the hull
-  // The same plates cut into radial bands, for advancement: built on first use, since most
-  // answers are settled before the narrow phase.
-  mutable std::vector<MovingBody> pieces;
-  mutable bool pieces_built = false;
-  std::vector<Plate> plates;  // the bodies' plates, machine coordinates (for the exact phase)
+  std::vector<StepBody> bodies;
+  std::vector<std::shared_ptr<MeshBvh>> manipulator_meshes;  // bends: the manipulator as obstacles
+  std::vector<Plate> manipulator_plates;
+  std::vector<Plate> part_plates;  // every plate of the part, placed (for naming features)
   Motion motion;
+  bool has_motion = false;
   double extra_clearance_mm = 0.0;  // a tessellated part's deflection, added to every clearance
-  bool exact_possible = true;       // the plates are the part's exact geometry
-  bool is_static = false;     // CLAMP: no motion
-  double lift_mm = 0.0;       // clamp-relative organs raised by this during the step
+  double lift_mm = 0.0;             // clamp-relative organs raised by this during the step
+  double pressing_plane_z = 0.0;    // engaged segments' lower face, where the part is pressed
+  LimitCheck limit;
 };
 
 StepValidator::StepValidator(std::shared_ptr<MachineScene> scene, ValidatorOptions options)
@@ -162,99 +190,224 @@ void StepValidator::clear_caches() {
 Result<std::shared_ptr<const StepValidator::Prepared>> StepValidator::prepare(const SheetPart& part, const BendStep& step) {
   const MachineModel& model = scene_->model();
   const MachineState& state = scene_->state();
-  std::uint64_t key = mix(part.content_hash(), step.hash());
-  if (!is_bend(step.kind)) key = mix(key, state.hash());
+  const std::uint64_t key = mix(mix(part.content_hash(), step.hash()), state.hash());
   if (auto it = prepared_.find(key); it != prepared_.end()) return it->second;
 
   auto prepared = std::make_shared<Prepared>();
-  const RigidTransform placement = part_placement(part, step);
+  Prepared& prep = *prepared;
   const double t = part.thickness_mm();
-  std::vector<Plate> plates;
-  if (part.has_surface()) {
-    // A part given by its surface: one body of (clipped) triangles; no plates, so the exact phase
-    // is replaced by adding the tessellation's deflection to the clearance.
-    std::vector<Vec3> vertices;
-    std::vector<TriangleMesh::Face> faces;
-    bool fixed_empty = true;
-    if (is_bend(step.kind)) {
-      auto split = part.split_surface(step.bend_point_mm, step.bend_direction, model.bend_zone_mm, vertices, faces, fixed_empty);
-      if (!split.ok()) return split.error();
-      if (faces.empty()) return invalid_argument("bend_line", "nothing of the part lies on the moving side beyond the bend zone");
-      if (fixed_empty) return invalid_argument("bend_line", "nothing of the part is left under the blankholder");
-    } else {
-      vertices = part.surface().vertices();
-      faces = part.surface().faces();
-    }
-    for (Vec3& v : vertices) v = placement.apply(v);
-    auto mesh = TriangleMesh::create(std::move(vertices), std::move(faces), {true});
-    if (!mesh.ok()) return mesh.error();
-    MovingBody body;
-    body.points = mesh.value().vertices();
-    auto bvh = MeshBvh::build(std::make_shared<const TriangleMesh>(std::move(mesh).value()));
-    if (!bvh.ok()) return bvh.error();
-    body.mesh = bvh.value();
-    prepared->bodies.push_back(body);
-    prepared->pieces.push_back(body);
-    prepared->pieces_built = true;
-    prepared->extra_clearance_mm = part.deflection_mm();
-    prepared->exact_possible = false;
-  } else if (is_bend(step.kind)) {
-    std::vector<Plate> moving, fixed;
-    auto split = part.split(step.bend_point_mm, step.bend_direction, model.bend_zone_mm, moving, fixed);
-    if (!split.ok()) return split.error();
-    if (moving.empty()) return invalid_argument("bend_line", "nothing of the part lies on the moving side beyond the bend zone");
-    if (fixed.empty()) return invalid_argument("bend_line", "nothing of the part is left under the blankholder");
-    plates = moving;
-  } else {
-    plates = part.plates();
-  }
-  for (Plate& p : plates) p = p.transformed(placement);
-  std::vector<std::vector<Plate>> groups;
-  if (!plates.empty()) groups.push_back(plates);
-  if (step.kind == StepKind::kRotate || step.kind == StepKind::kApproach || step.kind == StepKind::kRetract) {
-    // The manipulator's rotator column rides with the part: a body of its own, so that each gets
-    // a tight hull (the column turns about its own axis and sweeps little).
-    const double r = model.manipulator.rotator_radius_mm;
-    const Vec3 c(state.manipulator_x_mm, state.manipulator_y_mm, t);
-    groups.push_back({{c + Vec3(-r, -r, 0.0), {Vec3(2 * r, 0, 0), Vec3(0, 2 * r, 0), Vec3(0, 0, model.manipulator.rotator_height_mm)},
-                       "manipulator.rotator"}});
-  }
-  for (auto& group : groups) {
-    if (step.kind == StepKind::kRotate && step.retract_mm > 0.0)
-      for (Plate& p : group) p = p.transformed(RigidTransform::from_translation(Vec3(0, -step.retract_mm, 0)));
-    MovingBody body;
-    TriangleMesh mesh = plates_mesh(group);
-    body.points = mesh.vertices();
-    auto bvh = MeshBvh::build(std::make_shared<const TriangleMesh>(std::move(mesh)));
-    if (!bvh.ok()) return bvh.error();
-    body.mesh = bvh.value();
-    if (prepared->pieces_built) prepared->pieces.push_back(body);  // a surface part's bodies are its pieces
-    prepared->bodies.push_back(std::move(body));
-    prepared->plates.insert(prepared->plates.end(), group.begin(), group.end());
+  const bool bend = is_bend(step.kind);
+  const bool in_plane = !bend && step.kind != StepKind::kClamp;  // ROTATE, APPROACH, RETRACT
+  double low = std::numeric_limits<double>::infinity();
+  for (const Vec2& q : model.aba.profile_yz_mm) low = std::min(low, q.y());
+  prep.pressing_plane_z = state.clamp_z_mm + low;
+
+  // Where the part is: the step's placement, then (manipulator moves) the retract and earlier turn.
+  const Vec2 grip(state.manipulator_x_mm, state.manipulator_y_mm - (in_plane ? step.retract_mm : 0.0));
+  RigidTransform placement = part_placement(part, step);
+  RigidTransform pre = RigidTransform{};
+  if (in_plane) {
+    const Vec3 pivot(grip.x(), grip.y(), 0.0);
+    pre = RigidTransform::from_translation(pivot) * RigidTransform::from_axis_angle(Vec3::UnitZ(), step.turned_deg * kPi / 180.0) *
+          RigidTransform::from_translation(-pivot) * RigidTransform::from_translation(Vec3(0, -step.retract_mm, 0));
+    placement = pre * placement;
   }
 
+  // The part: held whole, or split into the held side and the moving flange.
+  std::vector<Plate> held_plates, moving_plates;
+  std::vector<Vec3> held_vertices, moving_vertices;
+  std::vector<TriangleMesh::Face> held_faces, moving_faces;
+  if (part.has_surface()) {
+    if (bend) {
+      auto split = part.split_surface(step.bend_point_mm, step.bend_direction, model.bend_zone_mm, moving_vertices,
+                                      moving_faces, held_vertices, held_faces);
+      if (!split.ok()) return split.error();
+      if (moving_faces.empty()) return invalid_argument("bend_point", "nothing of the part lies on the moving side beyond the bend zone");
+      if (held_faces.empty()) return invalid_argument("bend_point", "nothing of the part is left under the blankholder");
+    } else {
+      held_vertices = part.surface().vertices();
+      held_faces = part.surface().faces();
+    }
+    for (Vec3& v : held_vertices) v = placement.apply(v);
+    for (Vec3& v : moving_vertices) v = placement.apply(v);
+    prep.extra_clearance_mm = part.deflection_mm();
+  } else {
+    if (bend) {
+      auto split = part.split(step.bend_point_mm, step.bend_direction, model.bend_zone_mm, moving_plates, held_plates);
+      if (!split.ok()) return split.error();
+      if (moving_plates.empty()) return invalid_argument("bend_point", "nothing of the part lies on the moving side beyond the bend zone");
+      if (held_plates.empty()) return invalid_argument("bend_point", "nothing of the part is left under the blankholder");
+    } else {
+      held_plates = part.plates();
+    }
+    for (Plate& p : held_plates) p = p.transformed(placement);
+    for (Plate& p : moving_plates) p = p.transformed(placement);
+    prep.part_plates = held_plates;
+    prep.part_plates.insert(prep.part_plates.end(), moving_plates.begin(), moving_plates.end());
+  }
+
+  // The motion.
   switch (step.kind) {
     case StepKind::kBendUp:
-      prepared->motion = {true, Vec3(0, 0, t), Vec3::UnitX(), step.target_angle_deg * kPi / 180.0, Vec3::Zero()};
+      prep.motion = {true, Vec3(0, 0, t), Vec3::UnitX(), step.target_angle_deg * kPi / 180.0, Vec3::Zero()};
+      prep.has_motion = true;
       break;
     case StepKind::kBendDown:
-      prepared->motion = {true, Vec3::Zero(), Vec3::UnitX(), -step.target_angle_deg * kPi / 180.0, Vec3::Zero()};
+      prep.motion = {true, Vec3::Zero(), Vec3::UnitX(), -step.target_angle_deg * kPi / 180.0, Vec3::Zero()};
+      prep.has_motion = true;
       break;
     case StepKind::kRotate:
-      prepared->motion = {true, Vec3(state.manipulator_x_mm, state.manipulator_y_mm - step.retract_mm, 0.0), Vec3::UnitZ(),
-                          step.rotate_angle_deg * kPi / 180.0, Vec3::Zero()};
-      prepared->lift_mm = model.aba_lift_for_rotation_mm;
+      prep.motion = {true, Vec3(grip.x(), grip.y(), 0.0), Vec3::UnitZ(), step.rotate_angle_deg * kPi / 180.0, Vec3::Zero()};
+      prep.has_motion = true;
+      prep.lift_mm = model.aba_lift_for_rotation_mm;
       break;
     case StepKind::kApproach:
     case StepKind::kRetract:
-      prepared->motion = {false, Vec3::Zero(), Vec3::UnitX(), 0.0, step.travel_mm};
-      prepared->lift_mm = model.aba_lift_for_rotation_mm;
+      prep.motion = {false, Vec3::Zero(), Vec3::UnitX(), 0.0, step.travel_mm};
+      prep.has_motion = true;
+      prep.lift_mm = model.aba_lift_for_rotation_mm;
       break;
     case StepKind::kClamp:
-      prepared->is_static = true;
-      prepared->motion = {false, Vec3::Zero(), Vec3::UnitX(), 0.0, Vec3::Zero()};
+      prep.motion = {false, Vec3::Zero(), Vec3::UnitX(), 0.0, Vec3::Zero()};
       break;
   }
+
+  // Machine limits, in the order a programmer would look at them.
+  const HeldSide held{part.has_surface() ? nullptr : &held_plates, part.has_surface() ? &held_vertices : nullptr,
+                      part.has_surface() ? &held_faces : nullptr};
+  auto deny = [&](MachineLimit limit, std::string detail) {
+    if (prep.limit.limit == MachineLimit::kNone) prep.limit = {limit, std::move(detail)};
+  };
+  if (t < model.min_thickness_mm || t > model.max_thickness_mm)
+    deny(MachineLimit::kThickness, "thickness " + std::to_string(t) + " mm is outside the machine's [" +
+                                       std::to_string(model.min_thickness_mm) + ", " + std::to_string(model.max_thickness_mm) + "] mm");
+  if (bend && step.target_angle_deg > model.max_bend_angle_deg)
+    deny(MachineLimit::kBendAngle, "bend of " + std::to_string(step.target_angle_deg) + " degrees; the machine bends up to " +
+                                       std::to_string(model.max_bend_angle_deg));
+  if (bend) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    auto extend = [&](const Vec3& p) {
+      lo = std::min(lo, p.x());
+      hi = std::max(hi, p.x());
+    };
+    for (const Plate& p : moving_plates)
+      for (const Vec3& c : p.corners()) extend(c);
+    for (const Vec3& v : moving_vertices) extend(v);
+    if (hi - lo > model.max_bend_length_mm)
+      deny(MachineLimit::kBendLength, "the flange is " + std::to_string(hi - lo) + " mm long; the machine bends up to " +
+                                          std::to_string(model.max_bend_length_mm) + " mm");
+  }
+  const ManipulatorSpec& m = model.manipulator;
+  auto within = [](double v, const double range[2]) { return v >= range[0] - 1e-9 && v <= range[1] + 1e-9; };
+  if (!within(grip.x(), m.travel_x_mm))
+    deny(MachineLimit::kManipulatorTravelX, "manipulator x " + std::to_string(grip.x()) + " mm is outside its travel");
+  if (!within(grip.y(), m.travel_y_mm))
+    deny(MachineLimit::kManipulatorTravelY, "manipulator y " + std::to_string(grip.y()) + " mm (after the retract) is outside its travel");
+  if (step.kind == StepKind::kApproach || step.kind == StepKind::kRetract) {
+    const Vec2 end = grip + Vec2(step.travel_mm.x(), step.travel_mm.y());
+    if (!within(end.x(), m.travel_x_mm))
+      deny(MachineLimit::kManipulatorTravelX, "the travel ends at manipulator x " + std::to_string(end.x()) +
+                                                  " mm, outside [" + std::to_string(m.travel_x_mm[0]) + ", " +
+                                                  std::to_string(m.travel_x_mm[1]) + "]");
+    if (!within(end.y(), m.travel_y_mm))
+      deny(MachineLimit::kManipulatorTravelY, "the travel ends at manipulator y " + std::to_string(end.y()) +
+                                                  " mm, outside [" + std::to_string(m.travel_y_mm[0]) + ", " +
+                                                  std::to_string(m.travel_y_mm[1]) + "]");
+  }
+  if (!point_on_upper_face(held, grip, t))
+    deny(MachineLimit::kGripNotOnPart, std::string("the manipulator point is not on the part's upper face") +
+                                           (bend ? " on the held side of the bend" : ""));
+  if ((bend || step.kind == StepKind::kClamp) &&
+      clamped_area_mm2(model, state, held, prep.pressing_plane_z) < tolerances::kMinClampedAreaMm2)
+    deny(MachineLimit::kNoClampingSegment, "no engaged ABA segment presses the part's upper face (the blankholder's "
+                                           "lower face is at z = " + std::to_string(prep.pressing_plane_z) +
+                                           " mm, the sheet's upper face at " + std::to_string(t) + " mm)");
+
+  // The bodies.
+  std::vector<double> support_tops;
+  for (const Organ& o : scene_->organs())
+    if (o.support && std::find(support_tops.begin(), support_tops.end(), o.box.max.z()) == support_tops.end())
+      support_tops.push_back(o.box.max.z());
+  auto add_body = [&](std::string name, TriangleMesh mesh, std::vector<Plate> plates, bool moves, bool rests,
+                      bool pressed) -> Result<bool> {
+    StepBody b;
+    b.name = std::move(name);
+    b.moves = moves;
+    b.rests_on_supports = rests;
+    b.pressed_by_aba = pressed;
+    const bool in_plane_motion = !moves || !prep.motion.rotation || prep.motion.axis_direction.isApprox(Vec3::UnitZ());
+    if (rests && !in_plane_motion) return invalid_argument("step", "a body resting on the supports must move in the table's plane");
+    if (rests)
+      for (double top : support_tops) {
+        auto below = clip_mesh_at_z(mesh, top - tolerances::kIntendedContactMm, true);
+        if (!below.ok()) return below.error();
+        std::optional<MovingBody> version;
+        if (below.value()) {
+          auto body = make_body(std::move(*below.value()), plates);
+          if (!body.ok()) return body.error();
+          version = std::move(body).value();
+        }
+        b.below_support.emplace_back(top, std::move(version));
+      }
+    if (pressed) {
+      auto above = clip_mesh_at_z(mesh, prep.pressing_plane_z + tolerances::kIntendedContactMm, false);
+      if (!above.ok()) return above.error();
+      if (above.value()) {
+        auto body = make_body(std::move(*above.value()), plates);
+        if (!body.ok()) return body.error();
+        b.above_pressing = std::move(body).value();
+      }
+    }
+    auto whole = make_body(std::move(mesh), plates);
+    if (!whole.ok()) return whole.error();
+    b.whole = std::move(whole).value();
+    if (moves && prep.motion.rotation && !plates.empty()) {
+      // Advancement steps by the fastest point of a body: cutting the plates into bands of growing
+      // distance from the rotation axis lets the slow band next to a tool take long steps.
+      for (const Plate& plate : plates)
+        for (const Plate& band : radial_bands(plate, prep.motion)) {
+          auto piece = make_body(plates_mesh({band}), {band});
+          if (!piece.ok()) return piece.error();
+          b.pieces.push_back(std::move(piece).value());
+        }
+    } else {
+      b.pieces.push_back(b.whole);
+    }
+    prep.bodies.push_back(std::move(b));
+    return true;
+  };
+  auto surface_mesh = [](std::vector<Vec3> vertices, std::vector<TriangleMesh::Face> faces) {
+    return TriangleMesh::create(std::move(vertices), std::move(faces));
+  };
+  const bool part_pressed = bend || step.kind == StepKind::kClamp;
+  if (part.has_surface()) {
+    auto held_mesh = surface_mesh(held_vertices, held_faces);
+    if (!held_mesh.ok()) return held_mesh.error();
+    if (auto r = add_body("part", std::move(held_mesh).value(), {}, in_plane, true, part_pressed); !r.ok()) return r.error();
+    if (bend) {
+      auto flange = surface_mesh(moving_vertices, moving_faces);
+      if (!flange.ok()) return flange.error();
+      if (auto r = add_body("flange", std::move(flange).value(), {}, true, false, false); !r.ok()) return r.error();
+    }
+  } else {
+    if (auto r = add_body("part", plates_mesh(held_plates), held_plates, in_plane, true, part_pressed); !r.ok()) return r.error();
+    if (bend)
+      if (auto r = add_body("flange", plates_mesh(moving_plates), moving_plates, true, false, false); !r.ok()) return r.error();
+  }
+  std::vector<Plate> manipulator = manipulator_plates(m, Vec2(state.manipulator_x_mm, state.manipulator_y_mm),
+                                                      state.manipulator_rotation_deg, t);
+  for (Plate& p : manipulator) p = p.transformed(pre);
+  if (auto r = add_body("manipulator", plates_mesh(manipulator), manipulator, in_plane, false, false); !r.ok()) return r.error();
+  if (bend) {
+    // The flange turns past the manipulator holding the part: each of its plates is an obstacle.
+    for (const Plate& p : manipulator) {
+      auto bvh = MeshBvh::build(std::make_shared<const TriangleMesh>(plates_mesh({p})));
+      if (!bvh.ok()) return bvh.error();
+      prep.manipulator_meshes.push_back(bvh.value());
+    }
+    prep.manipulator_plates = manipulator;
+  }
+
   if (prepared_.size() >= options_.memo_capacity) prepared_.clear();
   prepared_[key] = prepared;
   return std::shared_ptr<const Prepared>(prepared);
@@ -268,10 +421,6 @@ Result<StepAnswer> StepValidator::validate(const SheetPart& part, const BendStep
   const auto t0 = Clock::now();
   auto valid = validate_step(scene_->model(), step);
   if (!valid.ok()) return valid.error();
-  const MachineModel& model = scene_->model();
-  if (part.thickness_mm() < model.min_thickness_mm || part.thickness_mm() > model.max_thickness_mm)
-    return invalid_argument("part.thickness_mm", "outside the machine's range [" + std::to_string(model.min_thickness_mm) +
-                                                     ", " + std::to_string(model.max_thickness_mm) + "] mm");
   const std::uint64_t key = mix(mix(mix(part.content_hash(), step.hash()), scene_->state().hash()), with_corrections ? 1 : 2);
   if (auto it = memo_.find(key); it != memo_.end()) {
     StepAnswer hit = it->second;
@@ -291,218 +440,428 @@ Result<StepAnswer> StepValidator::validate(const SheetPart& part, const BendStep
   return answer;
 }
 
+namespace {
+
+// The deepest penetration of the body into the obstacle at a pose: SAT on the body's plates, or
+// (for a surface) how deep its vertices lie inside the obstacle.
+double depth_at(const MovingBody& body, const RigidTransform& pose, const ConvexPolytope& obstacle) {
+  double depth = 0.0;
+  if (!body.plates.empty()) {
+    for (const Plate& p : body.plates)
+      depth = std::max(depth, penetration_depth(ConvexPolytope::plate(p.transformed(pose)), obstacle));
+    return depth;
+  }
+  ConvexPolytope point;
+  point.vertices.resize(1);
+  for (const Vec3& v : body.points) {
+    point.vertices[0] = pose.apply(v);
+    depth = std::max(depth, penetration_depth(point, obstacle));
+  }
+  return depth;
+}
+
+// The deepest penetration over s in [s0, 1]: a grid of samples, then a golden-section search
+// around the deepest one. A lower bound of the true deepest (exact when the depth is unimodal
+// around the sample found).
+double deepest_over_motion(const MovingBody& body, const Motion& motion, double s0, const ConvexPolytope& obstacle) {
+  if (s0 >= 1.0) return depth_at(body, motion.at(1.0), obstacle);
+  constexpr int kSamples = 64;
+  double best = 0.0, best_s = s0;
+  for (int i = 0; i <= kSamples; ++i) {
+    const double s = s0 + (1.0 - s0) * i / kSamples;
+    const double d = depth_at(body, motion.at(s), obstacle);
+    if (d > best) {
+      best = d;
+      best_s = s;
+    }
+  }
+  double a = std::max(s0, best_s - (1.0 - s0) / kSamples), b = std::min(1.0, best_s + (1.0 - s0) / kSamples);
+  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+  double c = b - g * (b - a), d = a + g * (b - a);
+  double fc = depth_at(body, motion.at(c), obstacle), fd = depth_at(body, motion.at(d), obstacle);
+  const double rate = std::max(1e-12, motion.rate(body.points));
+  while ((b - a) * rate > tolerances::kStepDepthResolutionMm) {
+    if (fc > fd) {
+      b = d;
+      d = c;
+      fd = fc;
+      c = b - g * (b - a);
+      fc = depth_at(body, motion.at(c), obstacle);
+    } else {
+      a = c;
+      c = d;
+      fc = fd;
+      d = a + g * (b - a);
+      fd = depth_at(body, motion.at(d), obstacle);
+    }
+  }
+  return std::max({best, fc, fd});
+}
+
+// The version of a body that meets an obstacle: outside the intended contact layer, if any.
+const MovingBody* version_for(const StepBody& body, const Obstacle& obstacle) {
+  if (obstacle.support && body.rests_on_supports) {
+    for (const auto& [top, below] : body.below_support)
+      if (top == obstacle.top_z) return below ? &*below : nullptr;
+    return nullptr;
+  }
+  if (obstacle.pressing && body.pressed_by_aba) return body.above_pressing ? &*body.above_pressing : nullptr;
+  return &body.whole;
+}
+
+// Does the body (version) start inside the obstacle, or the obstacle inside it? Penetration beyond
+// the contact layer's tolerance (for intended contact) or any at all otherwise.
+bool starts_inside(const StepBody& body, const MovingBody& version, const Obstacle& obstacle, double& depth) {
+  const bool intended = (obstacle.support && body.rests_on_supports) || (obstacle.pressing && body.pressed_by_aba);
+  depth = depth_at(body.whole, RigidTransform{}, obstacle.shape);
+  if (body.whole.plates.empty()) depth = depth_at(version, RigidTransform{}, obstacle.shape);
+  return depth > (intended ? tolerances::kIntendedContactMm : 0.0);
+}
+
+std::string plate_label_near(const std::vector<Plate>& plates, const Vec3& point, const std::string& fallback) {
+  double best = std::numeric_limits<double>::infinity();
+  std::string label = fallback;
+  for (const Plate& p : plates) {
+    ConvexPolytope q;
+    q.vertices = {point};
+    const double d = separation_lower_bound(q, ConvexPolytope::plate(p));
+    if (d < best) {
+      best = d;
+      label = p.label;
+    }
+  }
+  return label;
+}
+
+}  // namespace
+
 Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const BendStep& step) {
   StepAnswer answer;
   auto t = Clock::now();
   auto prepared_or = prepare(part, step);
   if (!prepared_or.ok()) return prepared_or.error();
-  answer.times.prepare_us = us_since(t);
-  t = Clock::now();
   const Prepared& prep = *prepared_or.value();
-  const std::vector<Organ>& organs = scene_->organs();
-  const bool bend = is_bend(step.kind);
-  const double step_rad = options_.hull_sample_step_deg * kPi / 180.0;
+  answer.times.prepare_us = us_since(t);
 
-  // The organs that take part, placed for the step: supports carry the part (intended contact);
-  // the blades form the flange being bent; clamp-relative organs rise while the part moves.
-  auto takes_part = [&](const Organ& o) { return !o.support && !(bend && o.name.rfind("blade.", 0) == 0); };
-  auto organ_pose = [&](const Organ& o) {
-    return o.relative_to_clamp && prep.lift_mm != 0.0 ? RigidTransform::from_translation(Vec3(0, 0, prep.lift_mm)) * o.pose
-                                                      : o.pose;
+  if (prep.limit.limit != MachineLimit::kNone) {
+    answer.verdict = Verdict::kInconclusive;
+    answer.denial = DenialReason::kMachineLimit;
+    answer.limit = prep.limit.limit;
+    answer.decided_by = Stage::kLimits;
+    answer.reason = std::string("beyond the machine's limits (") + to_string(prep.limit.limit) + "): " + prep.limit.detail;
+    return answer;
+  }
+
+  const std::vector<Organ>& organs = scene_->organs();
+  const double required = options_.required_clearance_mm + prep.extra_clearance_mm;
+  const double contact = required + tolerances::kStepContactResolutionMm;
+  const double window = tolerances::kClearanceReportWindowMm;
+  const double step_rad = options_.hull_sample_step_deg * kPi / 180.0;
+  const bool bend = is_bend(step.kind);
+  const bool clamped = bend || step.kind == StepKind::kClamp;
+
+  // The organs as obstacles for this step: raised with the blankholder while the part moves
+  // beneath it; the blade that forms a BEND_UP is the lower blade, so it is not parked there.
+  auto lifted = [&](const Organ& o) { return o.relative_to_clamp && prep.lift_mm != 0.0; };
+  auto box_of = [&](int i) {
+    const Organ& o = organs[i];
+    if (!lifted(o)) return o.box;
+    Aabb b = o.box;
+    b.min.z() += prep.lift_mm;
+    b.max.z() += prep.lift_mm;
+    return b;
+  };
+  auto obstacle_of = [&](int i) {
+    const Organ& o = organs[i];
+    Obstacle ob;
+    ob.name = o.name;
+    ob.mesh = o.mesh.get();
+    ob.pose = lifted(o) ? RigidTransform::from_translation(Vec3(0, 0, prep.lift_mm)) * o.pose : o.pose;
+    ob.box = box_of(i);
+    ob.shape = ConvexPolytope::prism(o.profile_yz, o.x_min, o.x_max).transformed(ob.pose);
+    ob.support = o.support;
+    ob.top_z = o.box.max.z();
+    ob.pressing = clamped && o.is_aba_segment && o.engaged;
+    return ob;
+  };
+  auto takes_part = [&](const Organ& o) { return !(step.kind == StepKind::kBendUp && o.name == "blade.lower"); };
+
+  // Clearance bookkeeping for a CLEAR answer: every pair's proven lower bound and measured value.
+  double lower_bound = std::numeric_limits<double>::infinity();
+  auto measured = [&](double d, const std::string& organ, const Vec3& point) {
+    if (d < answer.min_clearance_mm) {
+      answer.min_clearance_mm = d;
+      answer.clearance_organ = organ;
+      answer.clearance_point_mm = point;
+    }
   };
 
-  // 2. Global box: the whole motion against the whole machine.
-  Aabb swept;
-  if (prep.is_static) {
-    for (const MovingBody& b : prep.bodies) swept.extend(b.mesh->root_bounds());
-  } else {
-    swept = swept_bounds(prep.bodies, prep.motion, step_rad);
+  // 1. Bodies held still: the held side of the part and the manipulator in CLAMP and bends.
+  t = Clock::now();
+  for (const StepBody& body : prep.bodies) {
+    if (body.moves) continue;
+    const Aabb reach = body.whole.mesh->root_bounds().expanded(window);
+    for (int i : scene_->organs_overlapping(reach)) {
+      if (!takes_part(organs[i])) continue;
+      const Obstacle ob = obstacle_of(i);
+      const MovingBody* version = version_for(body, ob);
+      if (!version) continue;
+      double depth = 0.0;
+      const bool inside = starts_inside(body, *version, ob, depth);
+      DistanceRequest req;
+      req.upper_bound_mm = window;
+      auto d = distance(*version->mesh, RigidTransform{}, *ob.mesh, ob.pose, req);
+      if (!d.ok()) return d.error();
+      if (inside || (d.value().found && d.value().distance_mm <= contact)) {
+        StepCollision col;
+        col.organ = ob.name;
+        col.body = body.name == "manipulator" ? plate_label_near(body.whole.plates, d.value().point_a, body.name) : body.name;
+        col.point_mm = d.value().found ? d.value().point_a : version->points.front();
+        col.organ_point_mm = d.value().found ? d.value().point_b : col.point_mm;
+        col.depth_mm = depth;
+        answer.collisions.push_back(col);
+        continue;
+      }
+      if (d.value().found) {
+        measured(d.value().distance_mm, ob.name, d.value().point_a);
+        lower_bound = std::min(lower_bound, d.value().distance_mm);
+      }
+    }
   }
-  const double clearance = options_.required_clearance_mm + prep.extra_clearance_mm;
-  swept = swept.expanded(clearance);
-  Aabb machine;
-  for (const Organ& o : organs)
-    if (takes_part(o)) machine.extend(o.box);
-  machine.max.z() += prep.lift_mm;
-  answer.times.global_box_us = us_since(t);
-  if (!swept.overlaps(machine)) {
-    answer.verdict = Verdict::kClear;
-    answer.decided_by = Stage::kGlobalBox;
-    answer.reason = "the motion's box misses the machine's box";
+  answer.times.static_us = us_since(t);
+  if (!answer.collisions.empty()) {
+    answer.verdict = Verdict::kCollision;
+    answer.decided_by = Stage::kStatic;
+    answer.reason = answer.collisions.front().body + " stands in " + answer.collisions.front().organ +
+                    (step.kind == StepKind::kClamp ? " where the blankholder closes" : " while the part is clamped");
     return answer;
+  }
+
+  // The bodies that move, and the box their whole sweep stays in.
+  std::vector<const StepBody*> moving;
+  for (const StepBody& b : prep.bodies)
+    if (b.moves) moving.push_back(&b);
+  Aabb swept;
+  for (const StepBody* b : moving) swept.extend(swept_bounds({b->whole}, prep.motion, step_rad));
+  // Organs nobody examines further are at least their box distance away from every body.
+  auto bound_unexamined = [&](const std::vector<char>& examined) {
+    for (std::size_t i = 0; i < organs.size(); ++i) {
+      if (examined[i] || !takes_part(organs[i])) continue;
+      const Aabb organ_box = box_of(static_cast<int>(i));
+      for (const StepBody& b : prep.bodies) {
+        const Aabb box = b.moves ? swept : b.whole.mesh->root_bounds();
+        lower_bound = std::min(lower_bound, box_distance(box, organ_box));
+      }
+    }
+  };
+  auto finish_clear = [&](Stage stage, std::string reason) {
+    answer.verdict = Verdict::kClear;
+    answer.decided_by = stage;
+    answer.reason = std::move(reason);
+    answer.min_clearance_lower_mm = std::min(lower_bound, answer.min_clearance_mm);
+    return answer;
+  };
+  std::vector<char> examined(organs.size(), 0);
+  for (const StepBody& b : prep.bodies)
+    if (!b.moves)
+      for (int i : scene_->organs_overlapping(b.whole.mesh->root_bounds().expanded(window))) examined[i] = 1;
+  if (moving.empty()) {
+    bound_unexamined(examined);
+    return finish_clear(Stage::kStatic, "the blankholder closes on the sheet, and nothing stands where it presses or elsewhere in the machine");
+  }
+
+  // 2. Global box: the whole motion against the whole machine.
+  t = Clock::now();
+  const Aabb query = swept.expanded(required);
+  Aabb machine;
+  for (std::size_t i = 0; i < organs.size(); ++i)
+    if (takes_part(organs[i])) machine.extend(box_of(static_cast<int>(i)));
+  for (const Plate& p : prep.manipulator_plates)
+    for (const Vec3& c : p.corners()) machine.extend(c);
+  answer.times.global_box_us = us_since(t);
+  if (!query.overlaps(machine)) {
+    bound_unexamined(examined);
+    return finish_clear(Stage::kGlobalBox, "the motion's box misses the machine's box");
   }
 
   // 3. Broad phase over the organ tree (boxes lowered by the lift, so raised organs are found).
   t = Clock::now();
-  Aabb query = swept;
-  query.min.z() -= prep.lift_mm;
-  std::vector<SweepOrgan> candidates;
-  for (int i : scene_->organs_overlapping(query)) {
-    if (!takes_part(organs[i])) continue;
-    candidates.push_back({i, organs[i].mesh.get(), organ_pose(organs[i])});
+  Aabb tree_query = query;
+  tree_query.min.z() -= prep.lift_mm;
+  std::vector<Obstacle> obstacles;
+  for (int i : scene_->organs_overlapping(tree_query)) {
+    if (!takes_part(organs[i]) || !box_of(i).overlaps(query)) continue;
+    examined[i] = 1;
+    obstacles.push_back(obstacle_of(i));
+  }
+  for (std::size_t k = 0; k < prep.manipulator_plates.size(); ++k) {
+    Obstacle ob;
+    ob.name = prep.manipulator_plates[k].label;
+    ob.mesh = prep.manipulator_meshes[k].get();
+    ob.box = ob.mesh->root_bounds();
+    ob.shape = ConvexPolytope::plate(prep.manipulator_plates[k]);
+    if (ob.box.overlaps(query)) obstacles.push_back(std::move(ob));
+    else lower_bound = std::min(lower_bound, box_distance(swept, ob.box));
   }
   if (step.kind == StepKind::kBendDown) {
     // The cheap lowest-point check: a flange turning down about the X axis reaches its exact
-    // lowest point analytically (each corner on its circle); organs wholly below it drop out.
-    const double lowest = lowest_point_of_rotation(prep.bodies, prep.motion);
+    // lowest point analytically (each point on its circle); obstacles wholly below it drop out.
+    std::vector<Vec3> points;
+    for (const StepBody* b : moving) points.insert(points.end(), b->whole.points.begin(), b->whole.points.end());
+    const double lowest = lowest_point_of_rotation(points, prep.motion);
     answer.lowest_point_mm = lowest;
-    candidates.erase(std::remove_if(candidates.begin(), candidates.end(),
-                                    [&](const SweepOrgan& c) {
-                                      return organs[c.index].box.max.z() < lowest - clearance;
-                                    }),
-                     candidates.end());
+    obstacles.erase(std::remove_if(obstacles.begin(), obstacles.end(),
+                                   [&](const Obstacle& o) {
+                                     if (o.box.max.z() >= lowest - required) return false;
+                                     lower_bound = std::min(lower_bound, lowest - o.box.max.z());
+                                     return true;
+                                   }),
+                    obstacles.end());
   }
-  answer.candidate_organs = static_cast<int>(candidates.size());
+  bound_unexamined(examined);
+  answer.candidate_organs = static_cast<int>(obstacles.size());
   answer.times.broad_us = us_since(t);
-  if (candidates.empty()) {
-    answer.verdict = Verdict::kClear;
-    answer.decided_by = Stage::kBroadPhase;
-    answer.reason = "no organ's box meets the motion's box";
-    return answer;
-  }
 
-  // CLAMP: a static check. The blankholder pressing on the sheet is an intended touch, so the
-  // clamp-relative organs are tested lifted by the required clearance: anything of the part that
-  // still meets them stands up into the blankholder by more than that.
-  if (prep.is_static) {
-    t = Clock::now();
+  // The pairs: each moving body (the version outside any intended contact layer) and obstacle.
+  struct Pair {
+    const StepBody* body;
+    const MovingBody* version;
+    const Obstacle* obstacle;
+  };
+  std::vector<Pair> pairs;
+  for (const StepBody* b : moving)
+    for (const Obstacle& ob : obstacles)
+      if (const MovingBody* v = version_for(*b, ob)) pairs.push_back({b, v, &ob});
+  auto collide_now = [&](const Pair& p, double s, const Vec3& on_body, const Vec3& on_organ, const Vec3& normal,
+                         const std::string& why) {
+    StepCollision col;
+    col.organ = p.obstacle->name;
+    col.body = p.body->name == "manipulator" ? plate_label_near(p.body->whole.plates, prep.motion.at(s).inverse().apply(on_body), p.body->name)
+                                             : p.body->name;
+    col.point_mm = on_body;
+    col.organ_point_mm = on_organ;
+    col.normal = normal;
+    col.first_contact_fraction = s;
+    col.first_contact_deg = prep.motion.rotation ? std::fabs(prep.motion.angle_rad) * 180.0 / kPi * s : 0.0;
+    col.depth_mm = deepest_over_motion(p.body->whole, prep.motion, s, p.obstacle->shape);
+    answer.collisions.push_back(col);
+    answer.verdict = Verdict::kCollision;
     answer.decided_by = Stage::kNarrow;
-    answer.verdict = Verdict::kClear;
-    const RigidTransform lift = RigidTransform::from_translation(Vec3(0, 0, clearance));
-    for (const SweepOrgan& c : candidates) {
-      const Organ& organ = organs[c.index];
-      const RigidTransform pose = organ.relative_to_clamp ? lift * c.pose : c.pose;
-      for (const MovingBody& b : prep.bodies) {
-        auto hit = collide(*b.mesh, RigidTransform{}, *c.mesh, pose);
-        if (!hit.ok()) return hit.error();
-        if (hit.value().colliding) {
-          StepCollision col;
-          col.organ = organ.name;
-          col.point_mm = hit.value().contacts.front().point;
-          col.organ_point_mm = col.point_mm;
-          col.depth_mm = deepest_inside(organ, c.pose, {b}, RigidTransform{});
-          answer.collisions.push_back(col);
-          answer.verdict = Verdict::kCollision;
-          continue;
-        }
-        // Clearance from the organs that are not pressing on the sheet (within 50 mm).
-        if (organ.relative_to_clamp && organ.engaged) continue;
-        DistanceRequest near;
-        near.upper_bound_mm = std::min(answer.min_clearance_mm, 50.0);
-        auto d = distance(*b.mesh, RigidTransform{}, *c.mesh, c.pose, near);
-        if (!d.ok()) return d.error();
-        if (d.value().found) {
-          answer.min_clearance_mm = d.value().distance_mm;
-          answer.clearance_organ = organ.name;
-          answer.clearance_point_mm = d.value().point_a;
-        }
-      }
-    }
-    answer.reason = answer.verdict == Verdict::kClear ? "the blankholder closes on the sheet without hitting it"
-                                                      : "the blankholder would close on part of the sheet";
-    answer.times.narrow_us = us_since(t);
+    answer.reason = why;
     return answer;
+  };
+  // A body that starts inside an obstacle has no surface pair to find.
+  for (const Pair& p : pairs) {
+    double depth = 0.0;
+    if (starts_inside(*p.body, *p.version, *p.obstacle, depth))
+      return collide_now(p, 0.0, p.version->points.front(), p.version->points.front(), Vec3::Zero(),
+                         p.body->name + " starts inside " + p.obstacle->name);
   }
+  if (pairs.empty()) return finish_clear(Stage::kBroadPhase, "no organ's box meets the motion's box");
 
-  // 4. Hull level of detail.
+  // 4. Hull level of detail, per body version.
   t = Clock::now();
-  auto lod = hull_lod(prep.bodies, prep.motion, candidates, clearance, step_rad);
-  if (!lod.ok()) return lod.error();
-  std::vector<SweepOrgan> narrow;
-  for (int i : lod.value().remaining) narrow.push_back(candidates[i]);
+  std::vector<double> pair_lower(pairs.size(), 0.0);
+  std::vector<char> narrow(pairs.size(), 0), hulled(pairs.size(), 0);
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    if (hulled[i]) continue;
+    std::vector<SweepOrgan> organs_of;
+    std::vector<std::size_t> which;
+    for (std::size_t j = i; j < pairs.size(); ++j)
+      if (pairs[j].version == pairs[i].version) {
+        organs_of.push_back({static_cast<int>(j), pairs[j].obstacle->mesh, pairs[j].obstacle->pose});
+        which.push_back(j);
+        hulled[j] = 1;
+      }
+    auto lod = hull_lod({*pairs[i].version}, prep.motion, organs_of, required, step_rad);
+    if (!lod.ok()) return lod.error();
+    for (std::size_t k = 0; k < which.size(); ++k) pair_lower[which[k]] = lod.value().lower_bound_mm[k];
+    for (int k : lod.value().remaining) narrow[which[k]] = 1;
+  }
   answer.times.hull_us = us_since(t);
-  if (narrow.empty()) {
-    answer.verdict = Verdict::kClear;
-    answer.decided_by = Stage::kHullLod;
-    answer.reason = "the swept hull (inflated by the sagitta) clears every candidate organ";
-    return answer;
-  }
 
-  // 5. Narrow phase.
+  // 5. Narrow phase: conservative advancement of every remaining pair (piece by piece).
   t = Clock::now();
-  AdvanceOptions adv;
-  adv.required_clearance_mm = clearance;
-  adv.body_hull_step_rad = step_rad;
-  if (!prep.pieces_built) {
-    // Advancement steps by the fastest point of a body: cutting the plates into bands of growing
-    // distance from the rotation axis lets the slow band next to a tool take long steps.
-    for (const Plate& plate : prep.plates) {
-      for (const Plate& band : radial_bands(plate, prep.motion)) {
-        MovingBody piece;
-        TriangleMesh mesh = plates_mesh({band});
-        piece.points = mesh.vertices();
-        auto bvh = MeshBvh::build(std::make_shared<const TriangleMesh>(std::move(mesh)));
-        if (!bvh.ok()) return bvh.error();
-        piece.mesh = bvh.value();
-        prep.pieces.push_back(std::move(piece));
+  std::vector<SweepPair> sweep_pairs;
+  std::vector<std::size_t> sweep_owner;
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    if (!narrow[i]) continue;
+    const bool whole = pairs[i].version == &pairs[i].body->whole;
+    const SweepOrgan organ{static_cast<int>(i), pairs[i].obstacle->mesh, pairs[i].obstacle->pose};
+    if (whole) {
+      for (const MovingBody& piece : pairs[i].body->pieces) {
+        sweep_pairs.push_back({&piece, organ});
+        sweep_owner.push_back(i);
       }
+    } else {
+      sweep_pairs.push_back({pairs[i].version, organ});
+      sweep_owner.push_back(i);
     }
-    prep.pieces_built = true;
   }
-  auto swept_or = conservative_advance(prep.pieces, prep.motion, narrow, adv);
-  if (!swept_or.ok()) return swept_or.error();
-  const SweepOutcome& out = swept_or.value();
+  AdvanceOptions adv;
+  adv.required_clearance_mm = required;
+  adv.contact_resolution_mm = tolerances::kStepContactResolutionMm;
+  adv.body_hull_step_rad = step_rad;
+  SweepOutcome out;
+  if (!sweep_pairs.empty()) {
+    auto swept_or = conservative_advance(sweep_pairs, prep.motion, adv);
+    if (!swept_or.ok()) return swept_or.error();
+    out = swept_or.value();
+  }
   answer.narrow_steps = out.steps;
   answer.times.narrow_us = us_since(t);
-  answer.decided_by = Stage::kNarrow;
-  const double full_deg = prep.motion.rotation ? prep.motion.angle_rad * 180.0 / kPi : 0.0;
+  if (out.collided) {
+    const Pair& p = pairs[sweep_owner[out.organ]];
+    return collide_now(p, out.contact_s, out.point_on_body, out.point_on_organ, out.normal,
+                       out.contact_s == 0.0 ? "already within the required clearance of " + p.obstacle->name + " at the start"
+                                            : p.body->name + " reaches " + p.obstacle->name + " during the motion");
+  }
   if (out.budget_exceeded) {
     answer.verdict = Verdict::kInconclusive;
+    answer.denial = DenialReason::kSweepBudget;
+    answer.decided_by = Stage::kNarrow;
     answer.reason = "the motion grazes an organ for too long to certify (advancement budget exhausted)";
     return answer;
   }
-  if (out.collided) {
-    const SweepOrgan& hit = narrow[out.organ];
-    const Organ& organ = organs[hit.index];
-    StepCollision col;
-    col.organ = organ.name;
-    col.point_mm = out.point_on_body;
-    col.organ_point_mm = out.point_on_organ;
-    col.normal = out.normal;
-    col.first_contact_fraction = out.contact_s;
-    col.first_contact_deg = std::fabs(full_deg) * out.contact_s;
-    // Depth at the end of the step: the deepest moving vertex inside the organ.
-    col.depth_mm = deepest_inside(organ, hit.pose, prep.bodies, prep.motion.at(1.0));
-    answer.collisions.push_back(col);
-    answer.verdict = Verdict::kCollision;
-    answer.reason = out.contact_s == 0.0 ? "already within the required clearance of " + organ.name + " at the start"
-                                         : "reaches " + organ.name + " during the motion";
-    return answer;
-  }
-  answer.verdict = Verdict::kClear;
-  answer.min_clearance_mm = out.min_clearance_mm;
-  answer.certified_clearance_mm = out.certified_clearance_mm;
-  answer.clearance_point_mm = out.min_clearance_point;
-  if (out.min_clearance_organ >= 0) answer.clearance_organ = organs[narrow[out.min_clearance_organ].index].name;
-  answer.reason = "the exact sweep keeps its clearance from every organ";
 
-  // 6. Exact phase, only inside the tolerance window. The advancement already proves the clearance
-  // never falls below the required one between samples on these meshes; a near miss is measured
-  // again on the B-Rep (the moving plates and the organ's prism) at the closest sampled pose, so a
-  // tessellation can never turn a real collision into a clear answer.
-  if (prep.exact_possible && out.min_clearance_mm < options_.required_clearance_mm + options_.exact_window_mm) {
-    t = Clock::now();
-    answer.decided_by = Stage::kExact;
-    const SweepOrgan& near = narrow[out.min_clearance_organ];
-    auto exact = exact_clearance(prep.plates, prep.motion.at(out.min_clearance_s), organs[near.index], near.pose);
-    if (!exact.ok()) {
-      answer.verdict = Verdict::kInconclusive;
-      answer.reason = "near miss that the B-Rep confirmation could not measure: " + exact.error().to_string();
-    } else if (exact.value() <= options_.required_clearance_mm) {
-      answer.verdict = Verdict::kCollision;
-      answer.reason = "the B-Rep comes closer to " + organs[near.index].name + " than the required clearance";
-      StepCollision col;
-      col.organ = organs[near.index].name;
-      col.point_mm = out.min_clearance_point;
-      col.first_contact_fraction = out.min_clearance_s;
-      col.first_contact_deg = std::fabs(full_deg) * out.min_clearance_s;
-      answer.collisions.push_back(col);
-    } else {
-      answer.reason = "near miss confirmed on the B-Rep";
-    }
-    answer.times.exact_us = us_since(t);
+  // The clearance over the whole motion: the advanced pieces' proven bounds, then the nearest
+  // pairs narrowed to a bracket within the query budget.
+  t = Clock::now();
+  struct Candidate {
+    const MovingBody* body;
+    SweepOrgan organ;
+    double lower;
+  };
+  std::vector<Candidate> candidates;
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    if (narrow[i]) continue;
+    candidates.push_back({pairs[i].version, {static_cast<int>(i), pairs[i].obstacle->mesh, pairs[i].obstacle->pose}, pair_lower[i]});
   }
-  return answer;
+  if (!sweep_pairs.empty()) {
+    for (std::size_t k = 0; k < sweep_pairs.size(); ++k)
+      candidates.push_back({sweep_pairs[k].body, sweep_pairs[k].organ, out.pair_lower_mm[k]});
+    if (out.min_clearance_organ >= 0)
+      measured(out.min_clearance_mm, pairs[sweep_owner[out.min_clearance_organ]].obstacle->name, out.min_clearance_point);
+  }
+  std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) { return a.lower < b.lower; });
+  int budget = options_.clearance_query_budget;
+  for (Candidate& c : candidates) {
+    const double tolerance = std::max(tolerances::kClearanceBracketMm,
+                                      tolerances::kClearanceBracketRelative * std::min(answer.min_clearance_mm, window));
+    if (budget <= 0 || c.lower >= std::min(answer.min_clearance_mm, window) - tolerance) break;
+    auto bracket = clearance_bracket(*c.body, prep.motion, c.organ, window, tolerance, budget);
+    if (!bracket.ok()) return bracket.error();
+    budget -= bracket.value().queries;
+    c.lower = std::max(c.lower, bracket.value().lower_mm);
+    if (bracket.value().upper_mm < std::numeric_limits<double>::infinity())
+      measured(bracket.value().upper_mm, pairs[c.organ.index].obstacle->name, bracket.value().point_on_body);
+  }
+  for (const Candidate& c : candidates) lower_bound = std::min(lower_bound, c.lower);
+  answer.times.clearance_us = us_since(t);
+  const bool narrowed = !sweep_pairs.empty();
+  return finish_clear(narrowed ? Stage::kNarrow : Stage::kHullLod,
+                      narrowed ? "the exact sweep keeps its clearance from every organ"
+                               : "the swept hull (inflated by the sagitta) clears every candidate organ");
 }
 
 }  // namespace gk::p4

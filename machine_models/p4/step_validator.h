@@ -1,12 +1,19 @@
 // ValidateStep, in process: can the machine do this step with this part, and if not, what should
 // the sequencer change? The lazy pipeline of seed 002 §4.3, made safe:
-//   1 memo cache -> 2 global box -> 3 broad phase (organ BVH) -> 4 hull level of detail
-//   -> 5 narrow phase (conservative advancement on the exact meshes) -> 6 exact B-Rep confirmation
+//   1 memo cache -> machine limits -> bodies held still (static check) -> 2 global box
+//   -> 3 broad phase (organ BVH) -> 4 hull level of detail -> 5 narrow phase (conservative
+//   advancement on the exact meshes: a parametric part's plates are exact polyhedra)
+// Every body of the step is checked against every organ: the part (or, in a bend, its held side
+// and its moving flange), the manipulator (cups, gripper frame, rotator column) and, in a bend,
+// the manipulator as an obstacle of the flange. Intended contact is narrow: the part's lower face
+// on a support's top face, its upper face under an engaged ABA segment (tolerances.h).
 // Every answer says which stage decided it and how long each stage took.
 #pragma once
 
 #include "kernel/contact_verdict.h"
+#include "kernel/tolerances.h"
 #include "machine_models/p4/bend_step.h"
+#include "machine_models/p4/machine_limits.h"
 #include "machine_models/p4/machine_scene.h"
 #include "machine_models/p4/motion_sweep.h"
 #include "machine_models/p4/sheet_part.h"
@@ -18,42 +25,65 @@
 
 namespace gk::p4 {
 
-enum class Stage { kCache, kGlobalBox, kBroadPhase, kHullLod, kNarrow, kExact };
+enum class Stage { kCache, kLimits, kStatic, kGlobalBox, kBroadPhase, kHullLod, kNarrow };
 const char* to_string(Stage stage);
+
+// Why a step is denied without a collision (INCONCLUSIVE is a denial).
+enum class DenialReason { kNone, kMachineLimit, kSweepBudget };
+const char* to_string(DenialReason reason);
 
 enum class CorrectionKind { kNone, kRepoShift, kChangeAba, kRetract, kFlip };
 const char* to_string(CorrectionKind kind);
 
+// One step of a corrected sub-sequence, with the machine state it runs in.
+struct CorrectionStep {
+  BendStep step;
+  MachineState state;
+  bool part_turned_over = false;  // FLIP: the step is for the part turned over
+};
+
 struct Correction {
   CorrectionKind kind = CorrectionKind::kNone;
   double lateral_shift_mm = 0.0;        // REPO: the new lateral shift of the part
+  double shift_design_mm = 0.0;         // REPO: the design's shift (gap centre - feature centre)
+  double shift_range_mm[2] = {0, 0};    // REPO: the interval of clearing shifts around the one returned
   double retract_mm = 0.0;              // RETRACT: how far to pull the manipulator back before rotating
   std::vector<bool> engaged_segments;   // CHANGE_ABA: the segments to engage instead
-  bool verified = false;                // the corrected step was validated again and is CLEAR
+  // What to run instead of the denied step, in order; each was validated and is CLEAR when verified.
+  std::vector<CorrectionStep> steps;
+  bool verified = false;                // every step of `steps` was validated and is CLEAR
   std::string description;
 };
 
 struct StepCollision {
-  std::string organ;                    // e.g. "aba.segment.12", "bed", "tower.left"
-  Vec3 point_mm = Vec3::Zero();         // on the part, machine coordinates, at first contact
+  std::string organ;                    // e.g. "aba.segment.12", "bed", "tower.left", "manipulator.rotator"
+  std::string body;                     // what of the step hit it: "part", "flange", "manipulator.cup.0", ...
+  Vec3 point_mm = Vec3::Zero();         // on the body, machine coordinates, at first contact
   Vec3 organ_point_mm = Vec3::Zero();   // on the organ
-  Vec3 normal = Vec3::Zero();           // impact normal, from the organ towards the part
-  double depth_mm = 0.0;                // deepest part vertex inside the organ at the step's end
+  Vec3 normal = Vec3::Zero();           // impact normal, from the organ towards the body
+  double depth_mm = 0.0;                // deepest penetration found over the motion (0: within the clearance only)
   double first_contact_deg = 0.0;       // rotations: the largest angle this step can safely reach
   double first_contact_fraction = 0.0;  // of the motion, in [0, 1]
 };
 
 struct StageTimes {
-  double cache_us = 0, prepare_us = 0, global_box_us = 0, broad_us = 0, hull_us = 0, narrow_us = 0, exact_us = 0, total_us = 0;
+  double cache_us = 0, prepare_us = 0, static_us = 0, global_box_us = 0, broad_us = 0, hull_us = 0, narrow_us = 0,
+         clearance_us = 0, total_us = 0;
 };
 
 struct StepAnswer {
   Verdict verdict = Verdict::kInconclusive;  // CLEAR, COLLISION or INCONCLUSIVE (a denial)
   std::string reason;
+  DenialReason denial = DenialReason::kNone;     // INCONCLUSIVE: why
+  MachineLimit limit = MachineLimit::kNone;      // denial == kMachineLimit: which
   Stage decided_by = Stage::kNarrow;
   std::vector<StepCollision> collisions;
-  double min_clearance_mm = std::numeric_limits<double>::infinity();  // when clear: smallest sampled clearance
-  double certified_clearance_mm = std::numeric_limits<double>::infinity();
+  // The smallest clearance over the whole step, between every body and every organ, as a proven
+  // bracket: the true minimum lies in [min_clearance_lower_mm, min_clearance_mm]. min_clearance_mm
+  // was measured (infinity: nothing was measured within the report window); the lower bound is
+  // proven. Narrowed to tolerances::kClearanceBracket* within kClearanceReportWindowMm.
+  double min_clearance_mm = std::numeric_limits<double>::infinity();
+  double min_clearance_lower_mm = 0.0;
   std::string clearance_organ;
   Vec3 clearance_point_mm = Vec3::Zero();
   Correction correction;
@@ -64,9 +94,9 @@ struct StepAnswer {
 };
 
 struct ValidatorOptions {
-  double required_clearance_mm = 0.1;     // seed 002 Table 1: minimum clearance about 0.1 mm
+  double required_clearance_mm = tolerances::kStepClearanceMm;
   double hull_sample_step_deg = 15.0;     // largest angle between hull samples
-  double exact_window_mm = 0.05;          // confirm on B-Rep when the narrow clearance ends this close
+  int clearance_query_budget = 64;        // distance queries spent narrowing a CLEAR step's clearance
   bool compute_corrections = true;
   std::size_t memo_capacity = 100000;
 };
@@ -93,6 +123,9 @@ class StepValidator {
   Result<StepAnswer> run_pipeline(const SheetPart& part, const BendStep& step);
   Result<std::shared_ptr<const Prepared>> prepare(const SheetPart& part, const BendStep& step);
   void add_correction(const SheetPart& part, const BendStep& step, StepAnswer& answer);
+  // Validates the steps in order, each in its state; true when every one is CLEAR. Restores the
+  // scene's state.
+  bool validate_sequence(const SheetPart& part, const std::vector<CorrectionStep>& steps);
 
   std::shared_ptr<MachineScene> scene_;
   ValidatorOptions options_;

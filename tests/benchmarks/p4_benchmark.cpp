@@ -102,7 +102,8 @@ void run(benchmark::State& state, Mode mode) {
       sum.broad_us += st.broad_us;
       sum.hull_us += st.hull_us;
       sum.narrow_us += st.narrow_us;
-      sum.exact_us += st.exact_us;
+      sum.static_us += st.static_us;
+      sum.clearance_us += st.clearance_us;
       ++answers;
       collisions += a.value().verdict == Verdict::kClear ? 0 : 1;
     }
@@ -118,7 +119,8 @@ void run(benchmark::State& state, Mode mode) {
   state.counters["stage_broad_us"] = sum.broad_us / n;
   state.counters["stage_hull_us"] = sum.hull_us / n;
   state.counters["stage_narrow_us"] = sum.narrow_us / n;
-  state.counters["stage_exact_us"] = sum.exact_us / n;
+  state.counters["stage_static_us"] = sum.static_us / n;
+  state.counters["stage_clearance_us"] = sum.clearance_us / n;
   state.counters["not_clear"] = static_cast<double>(collisions) / static_cast<double>(state.iterations());
 }
 

@@ -31,6 +31,7 @@ Engine make_engine(double clamp_z, ValidatorOptions options = {}) {
   e.validator = std::make_unique<StepValidator>(e.scene, options);
   MachineState s;
   s.clamp_z_mm = clamp_z;
+  s.manipulator_y_mm = -400.0;  // on the held side of the parts below, clear of the blankholder
   EXPECT_TRUE(e.validator->set_state(s).ok());
   return e;
 }
@@ -154,6 +155,7 @@ TEST(P4Scenarios, BoxWithSideFlangesBlocksATooLongBlankholderAtClamp) {
   // Engaging only the segments between the flanges clamps cleanly (the others rise 120 mm, over
   // the 50 mm flanges).
   MachineState fitted = MachineState::with_aba_span(e.model, -395.0, 395.0, t);
+  fitted.manipulator_y_mm = -400.0;
   ASSERT_TRUE(e.validator->set_state(fitted).ok());
   auto b = e.validator->validate(part, clamp);
   ASSERT_TRUE(b.ok());
@@ -183,6 +185,7 @@ TEST(P4Scenarios, InnerTabPassesThroughAGapAndHitsAnEngagedSegment) {
   EXPECT_EQ(wrong.value().collisions.front().organ, "aba.segment." + std::to_string(slot));
   // Right segments: that slot left out, so the tab stands in the gap.
   MachineState right = MachineState::with_aba_span(e.model, -1250.0, 1250.0, t);
+  right.manipulator_y_mm = -400.0;
   right.engaged_segments[slot] = false;
   ASSERT_TRUE(e.validator->set_state(right).ok());
   auto ok = e.validator->validate(part, clamp);
@@ -242,19 +245,25 @@ TEST(P4Pipeline, BadInputGivesErrorsNamingTheField) {
   auto nan = e.validator->validate(part, s);
   ASSERT_FALSE(nan.ok());
   EXPECT_EQ(nan.error().field, "target_angle_deg");
-  s.target_angle_deg = 150.0;
+  s.target_angle_deg = 180.0;  // not a bend at all
+  auto absurd = e.validator->validate(part, s);
+  ASSERT_FALSE(absurd.ok());
+  EXPECT_EQ(absurd.error().field, "target_angle_deg");
+  s.target_angle_deg = 150.0;  // a bend, but past the machine's 135 degrees: denied with the limit named
   auto over = e.validator->validate(part, s);
-  ASSERT_FALSE(over.ok());
-  EXPECT_EQ(over.error().field, "target_angle_deg");
+  ASSERT_TRUE(over.ok());
+  EXPECT_EQ(over.value().verdict, Verdict::kInconclusive);
+  EXPECT_EQ(over.value().denial, DenialReason::kMachineLimit);
+  EXPECT_EQ(over.value().limit, MachineLimit::kBendAngle);
   s = bend(StepKind::kBendUp, 700.0, 90.0);
   s.bend_direction = Vec2::Zero();
   auto zero = e.validator->validate(part, s);
   ASSERT_FALSE(zero.ok());
-  EXPECT_EQ(zero.error().field, "bend_line.direction");
+  EXPECT_EQ(zero.error().field, "bend_direction");
   s = bend(StepKind::kBendUp, 900.0, 90.0);  // beyond the part: nothing moves
   auto nothing = e.validator->validate(part, s);
   ASSERT_FALSE(nothing.ok());
-  EXPECT_EQ(nothing.error().field, "bend_line");
+  EXPECT_EQ(nothing.error().field, "bend_point");
   MachineState bad;
   bad.engaged_segments.assign(7, true);
   auto state = e.validator->set_state(bad);
@@ -264,8 +273,14 @@ TEST(P4Pipeline, BadInputGivesErrorsNamingTheField) {
   bad.manipulator_y_mm = 5000.0;
   EXPECT_EQ(e.validator->set_state(bad).error().field, "manipulator_y_mm");
   auto thick = e.validator->validate(flat_part(1000.0, 800.0, 5.0), bend(StepKind::kBendUp, 700.0, 90.0));
-  ASSERT_FALSE(thick.ok());
-  EXPECT_EQ(thick.error().field, "part.thickness_mm");
+  ASSERT_TRUE(thick.ok());
+  EXPECT_EQ(thick.value().limit, MachineLimit::kThickness);
+  EXPECT_EQ(thick.value().verdict, Verdict::kInconclusive);
+  // Absurd magnitudes are errors naming the field, never answers.
+  EXPECT_EQ(SheetPart::create({1e8, 800.0, 1.0, {}, {}}).error().field, "width_mm");
+  s = bend(StepKind::kBendUp, 700.0, 90.0);
+  s.bend_point_mm.x() = 1e308;
+  EXPECT_EQ(e.validator->validate(part, s).error().field, "bend_point");
   EXPECT_FALSE(SheetPart::create({1000.0, 800.0, 1.0, {{Side::kXMax, 50.0, 200.0, 0.0, 0.0}}, {}}).ok());
 }
 
@@ -309,17 +324,20 @@ TEST(P4SurfaceParts, ARealStepSheetMetalPartGoesThroughThePipeline) {
   ASSERT_TRUE(meshed.ok());
   auto part = SheetPart::from_surface(std::move(meshed.value().mesh), 1.0, 0.05);
   ASSERT_TRUE(part.ok());
-  // The heatsink spans Y [-6.2, 6.6]: bend what lies beyond Y = 2 up by 45 degrees.
+  // The heatsink spans Y [-6.2, 6.6]: bend what lies beyond Y = 2 up by 45 degrees. A 27 mm part
+  // cannot be held by a manipulator whose travel stops 50 mm behind the bend line: denied, with
+  // the limit named, never CLEAR.
   BendStep step = bend(StepKind::kBendUp, 2.0, 45.0);
   auto a = e.validator->validate(part.value(), step);
   ASSERT_TRUE(a.ok()) << a.error().to_string();
-  EXPECT_EQ(a.value().verdict, Verdict::kClear) << a.value().reason;  // a 27 mm part clears a 2.5 m machine
+  EXPECT_EQ(a.value().verdict, Verdict::kInconclusive) << a.value().reason;
+  EXPECT_EQ(a.value().limit, MachineLimit::kGripNotOnPart);
   step.kind = StepKind::kClamp;
   ASSERT_TRUE(e.validator->validate(part.value(), step).ok());
   step = bend(StepKind::kBendUp, 20.0, 45.0);  // beyond the part
   auto none = e.validator->validate(part.value(), step);
   ASSERT_FALSE(none.ok());
-  EXPECT_EQ(none.error().field, "bend_line");
+  EXPECT_EQ(none.error().field, "bend_point");
 }
 
 }  // namespace
@@ -352,7 +370,7 @@ TEST(P4Scenarios, RetractingWithAFlangeTallerThanTheOpenBlankholderCatchesIt) {
   approach.travel_mm = Vec3(0.0, 100.0, 0.0);
   EXPECT_EQ(e.validator->validate(tall, approach).value().verdict, Verdict::kClear);
   approach.travel_mm = Vec3::Zero();
-  EXPECT_EQ(e.validator->validate(tall, approach).error().field, "travel_mm");
+  EXPECT_EQ(e.validator->validate(tall, approach).error().field, "travel");
 }
 
 }  // namespace

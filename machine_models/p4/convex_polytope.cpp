@@ -1,0 +1,88 @@
+#include "machine_models/p4/convex_polytope.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace gk::p4 {
+
+ConvexPolytope ConvexPolytope::prism(const std::vector<Vec2>& profile, double x_min, double x_max) {
+  ConvexPolytope p;
+  for (const Vec2& q : profile) p.vertices.emplace_back(x_min, q.x(), q.y());
+  for (const Vec2& q : profile) p.vertices.emplace_back(x_max, q.x(), q.y());
+  p.face_normals.push_back(Vec3::UnitX());
+  p.edge_directions.push_back(Vec3::UnitX());
+  for (std::size_t i = 0; i < profile.size(); ++i) {
+    const Vec2 e = profile[(i + 1) % profile.size()] - profile[i];
+    if (!(e.norm() > 0.0)) continue;
+    const Vec2 u = e.normalized();
+    p.edge_directions.emplace_back(0.0, u.x(), u.y());
+    p.face_normals.emplace_back(0.0, u.y(), -u.x());  // outward for a counter-clockwise profile
+  }
+  return p;
+}
+
+ConvexPolytope ConvexPolytope::plate(const Plate& plate) {
+  ConvexPolytope p;
+  for (const Vec3& c : plate.corners()) p.vertices.push_back(c);
+  for (const Vec3& e : plate.edge) {
+    if (!(e.norm() > 0.0)) continue;
+    p.face_normals.push_back(e.normalized());
+    p.edge_directions.push_back(e.normalized());
+  }
+  return p;
+}
+
+ConvexPolytope ConvexPolytope::transformed(const RigidTransform& pose) const {
+  ConvexPolytope p;
+  p.vertices.reserve(vertices.size());
+  for (const Vec3& v : vertices) p.vertices.push_back(pose.apply(v));
+  for (const Vec3& n : face_normals) p.face_normals.push_back(pose.apply_direction(n));
+  for (const Vec3& e : edge_directions) p.edge_directions.push_back(pose.apply_direction(e));
+  return p;
+}
+
+namespace {
+
+// The signed overlap of the two projections on a unit axis: > 0 overlap, <= 0 a gap of -overlap.
+double overlap_along(const ConvexPolytope& a, const ConvexPolytope& b, const Vec3& axis) {
+  double a_lo = std::numeric_limits<double>::infinity(), a_hi = -a_lo, b_lo = a_lo, b_hi = -a_lo;
+  for (const Vec3& v : a.vertices) {
+    const double p = axis.dot(v);
+    a_lo = std::min(a_lo, p);
+    a_hi = std::max(a_hi, p);
+  }
+  for (const Vec3& v : b.vertices) {
+    const double p = axis.dot(v);
+    b_lo = std::min(b_lo, p);
+    b_hi = std::max(b_hi, p);
+  }
+  return std::min(a_hi - b_lo, b_hi - a_lo);
+}
+
+// The smallest overlap over every candidate axis (negative: the largest gap found).
+double smallest_overlap(const ConvexPolytope& a, const ConvexPolytope& b) {
+  double smallest = std::numeric_limits<double>::infinity();
+  auto try_axis = [&](const Vec3& axis) { smallest = std::min(smallest, overlap_along(a, b, axis)); };
+  for (const Vec3& n : a.face_normals) try_axis(n);
+  for (const Vec3& n : b.face_normals) try_axis(n);
+  for (const Vec3& ea : a.edge_directions)
+    for (const Vec3& eb : b.edge_directions) {
+      const Vec3 c = ea.cross(eb);
+      const double len = c.norm();
+      if (len > 1e-9) try_axis(c / len);
+    }
+  return smallest;
+}
+
+}  // namespace
+
+double penetration_depth(const ConvexPolytope& a, const ConvexPolytope& b) {
+  return std::max(0.0, smallest_overlap(a, b));
+}
+
+double separation_lower_bound(const ConvexPolytope& a, const ConvexPolytope& b) {
+  return std::max(0.0, -smallest_overlap(a, b));
+}
+
+}  // namespace gk::p4
