@@ -46,7 +46,8 @@ inline constexpr double kIntendedContactMm = 1.0e-2;
 inline constexpr double kMinClampedAreaMm2 = 1.0;
 
 // A CLEAR step reports its smallest clearance over the whole motion as a proven bracket, refined
-// until it is this narrow (or this fraction of the clearance, whichever is larger)... [mm], [1]
+// (within a budget of distance queries) until it is this narrow, or this fraction of the
+// clearance, whichever is larger... [mm], [1]
 inline constexpr double kClearanceBracketMm = 5.0e-3;
 inline constexpr double kClearanceBracketRelative = 1.0e-2;
 // ...for clearances below this; farther ones are reported as a lower bound only. [mm]

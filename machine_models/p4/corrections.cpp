@@ -153,9 +153,31 @@ void StepValidator::add_correction(const SheetPart& part, const BendStep& step, 
     return;
   }
 
+  // REPO: shift the part along the bend line so that the colliding feature stands under a gap of
+  // disengaged segments: the design's shift is (gap centre - feature centre); the clearing shift
+  // nearest to it is returned with the interval of clearing shifts around it. The lateral move
+  // (ABA open), the clamp and the step are validated at the new position.
+  const auto [fx0, fx1] = feature_x_range(part, step, hit.point_mm);
+  const double feature_centre = 0.5 * (fx0 + fx1), feature_width = fx1 - fx0;
+  std::vector<std::pair<double, double>> gaps;
+  for (std::size_t i = 0; i < model.aba.segment_widths_mm.size();) {
+    const bool on = original.engaged_segments.empty() || original.engaged_segments[i];
+    if (on) {
+      ++i;
+      continue;
+    }
+    std::size_t j = i;
+    while (j + 1 < model.aba.segment_widths_mm.size() && !(original.engaged_segments[j + 1])) ++j;
+    if (model.slot_x_max(j) - model.slot_x_min(i) >= feature_width + 2.0 * options_.required_clearance_mm)
+      gaps.emplace_back(model.slot_x_min(i), model.slot_x_max(j));
+    i = j + 1;
+  }
+  std::sort(gaps.begin(), gaps.end(), [&](const auto& a, const auto& b) {
+    return std::fabs(0.5 * (a.first + a.second) - feature_centre) < std::fabs(0.5 * (b.first + b.second) - feature_centre);
+  });
   // CHANGE_ABA: disengage the segments over the features that run into the blankholder, as long
   // as what is left still clamps the part: the new clamp and the step are validated.
-  {
+  auto try_change_aba = [&]() {
     std::vector<bool> engaged = original.engaged_segments;
     if (engaged.empty()) engaged.assign(model.aba.segment_widths_mm.size(), true);
     StepAnswer current = answer;
@@ -193,32 +215,11 @@ void StepValidator::add_correction(const SheetPart& part, const BendStep& step, 
       c.steps = std::move(steps);
       c.verified = true;
       c.description = "engage a blankholder that leaves the colliding features free";
-      return;
+      return true;
     }
-  }
+    return false;
+  };
 
-  // REPO: shift the part along the bend line so that the colliding feature stands under a gap of
-  // disengaged segments: the design's shift is (gap centre - feature centre); the clearing shift
-  // nearest to it is returned with the interval of clearing shifts around it. The lateral move
-  // (ABA open), the clamp and the step are validated at the new position.
-  const auto [fx0, fx1] = feature_x_range(part, step, hit.point_mm);
-  const double feature_centre = 0.5 * (fx0 + fx1), feature_width = fx1 - fx0;
-  std::vector<std::pair<double, double>> gaps;
-  for (std::size_t i = 0; i < model.aba.segment_widths_mm.size();) {
-    const bool on = original.engaged_segments.empty() || original.engaged_segments[i];
-    if (on) {
-      ++i;
-      continue;
-    }
-    std::size_t j = i;
-    while (j + 1 < model.aba.segment_widths_mm.size() && !(original.engaged_segments[j + 1])) ++j;
-    if (model.slot_x_max(j) - model.slot_x_min(i) >= feature_width + 2.0 * options_.required_clearance_mm)
-      gaps.emplace_back(model.slot_x_min(i), model.slot_x_max(j));
-    i = j + 1;
-  }
-  std::sort(gaps.begin(), gaps.end(), [&](const auto& a, const auto& b) {
-    return std::fabs(0.5 * (a.first + a.second) - feature_centre) < std::fabs(0.5 * (b.first + b.second) - feature_centre);
-  });
   auto repo_steps = [&](double shift) {
     BendStep move = step, shifted = step;
     move.kind = StepKind::kApproach;
@@ -237,55 +238,62 @@ void StepValidator::add_correction(const SheetPart& part, const BendStep& step, 
     const std::vector<CorrectionStep> steps = repo_steps(shift);
     return validate_sequence(part, {steps.begin() + 1, steps.end()});  // the lateral move is checked at the end
   };
-  c.kind = CorrectionKind::kRepoShift;
-  for (std::size_t g = 0; g < gaps.size() && g < 3; ++g) {
-    const double design = 0.5 * (gaps[g].first + gaps[g].second) - feature_centre;
-    const double half = 0.5 * (gaps[g].second - gaps[g].first);
-    // The clearing shift nearest the design's: the design itself, or the nearest clearing probe.
-    double found = std::numeric_limits<double>::quiet_NaN();
-    if (shifted_clears(design)) {
-      found = design;
-    } else {
-      for (double d = 1.0; d <= half && std::isnan(found); d *= 2.0)
-        for (double sign : {-1.0, 1.0})
-          if (std::isnan(found) && shifted_clears(design + sign * d)) found = design + sign * d;
-      if (std::isnan(found)) continue;
-      // Narrow the side towards the design to 0.5 mm.
-      double clear_at = found, blocked_at = design;
-      while (std::fabs(clear_at - blocked_at) > 0.5) {
-        const double mid = 0.5 * (clear_at + blocked_at);
-        (shifted_clears(mid) ? clear_at : blocked_at) = mid;
+  auto try_repo = [&]() {
+    for (std::size_t g = 0; g < gaps.size() && g < 3; ++g) {
+      const double design = 0.5 * (gaps[g].first + gaps[g].second) - feature_centre;
+      const double half = 0.5 * (gaps[g].second - gaps[g].first);
+      // The clearing shift nearest the design's: the design itself, or the nearest clearing probe.
+      double found = std::numeric_limits<double>::quiet_NaN();
+      if (shifted_clears(design)) {
+        found = design;
+      } else {
+        for (double d = 1.0; d <= half && std::isnan(found); d *= 2.0)
+          for (double sign : {-1.0, 1.0})
+            if (std::isnan(found) && shifted_clears(design + sign * d)) found = design + sign * d;
+        if (std::isnan(found)) continue;
+        // Narrow the side towards the design to 0.5 mm.
+        double clear_at = found, blocked_at = design;
+        while (std::fabs(clear_at - blocked_at) > 0.5) {
+          const double mid = 0.5 * (clear_at + blocked_at);
+          (shifted_clears(mid) ? clear_at : blocked_at) = mid;
+        }
+        found = clear_at;
       }
-      found = clear_at;
+      // The interval of clearing shifts around it, each end to 0.5 mm.
+      auto edge = [&](double sign) {
+        double inside = found, outside = found + sign * 1.0;
+        double step_mm = 1.0;
+        while (shifted_clears(outside) && std::fabs(outside - found) < 2.0 * half + 50.0) {
+          inside = outside;
+          step_mm *= 2.0;
+          outside = found + sign * step_mm;
+        }
+        while (std::fabs(outside - inside) > 0.5) {
+          const double mid = 0.5 * (inside + outside);
+          (shifted_clears(mid) ? inside : outside) = mid;
+        }
+        return inside;
+      };
+      const double lo = edge(-1.0), hi = edge(1.0);
+      std::vector<CorrectionStep> steps = repo_steps(found);
+      if (!validate_sequence(part, steps)) continue;  // the lateral move itself does not clear
+      c.lateral_shift_mm = step.lateral_shift_mm + found;
+      c.shift_design_mm = design;
+      c.shift_range_mm[0] = step.lateral_shift_mm + lo;
+      c.shift_range_mm[1] = step.lateral_shift_mm + hi;
+      c.steps = std::move(steps);
+      c.verified = true;
+      c.kind = CorrectionKind::kRepoShift;
+      c.description = "shift the part " + std::to_string(found) + " mm along the bend line (the design's " +
+                      std::to_string(design) + " mm: gap centre - feature centre)";
+      return true;
     }
-    // The interval of clearing shifts around it, each end to 0.5 mm.
-    auto edge = [&](double sign) {
-      double inside = found, outside = found + sign * 1.0;
-      double step_mm = 1.0;
-      while (shifted_clears(outside) && std::fabs(outside - found) < 2.0 * half + 50.0) {
-        inside = outside;
-        step_mm *= 2.0;
-        outside = found + sign * step_mm;
-      }
-      while (std::fabs(outside - inside) > 0.5) {
-        const double mid = 0.5 * (inside + outside);
-        (shifted_clears(mid) ? inside : outside) = mid;
-      }
-      return inside;
-    };
-    const double lo = edge(-1.0), hi = edge(1.0);
-    std::vector<CorrectionStep> steps = repo_steps(found);
-    if (!validate_sequence(part, steps)) continue;  // the lateral move itself does not clear
-    c.lateral_shift_mm = step.lateral_shift_mm + found;
-    c.shift_design_mm = design;
-    c.shift_range_mm[0] = step.lateral_shift_mm + lo;
-    c.shift_range_mm[1] = step.lateral_shift_mm + hi;
-    c.steps = std::move(steps);
-    c.verified = true;
-    c.description = "shift the part " + std::to_string(found) + " mm along the bend line (the design's " +
-                    std::to_string(design) + " mm: gap centre - feature centre)";
-    return;
-  }
+    return false;
+  };
+  // The sequencer's blankholder has a gap that fits the feature: move the part to it first;
+  // otherwise change the blankholder.
+  if (!gaps.empty() && try_repo()) return;
+  if (try_change_aba()) return;
   c.kind = CorrectionKind::kNone;
   c.description = gaps.empty() ? "no gap of disengaged segments is wide enough for the feature, and no blankholder change clears it"
                                : "no shift into a gap of disengaged segments clears it, nor does a blankholder change";

@@ -72,8 +72,9 @@ bool contains(const Polygon& poly, const Vec2& q) {
   return true;
 }
 
-// The upper faces of the held side at height top_z, as convex polygons in XY.
-std::vector<Polygon> upper_faces(const HeldSide& held, double top_z) {
+// The upper faces of the held side at height top_z (or, with at_or_above, at any height from
+// top_z up), as convex polygons in XY.
+std::vector<Polygon> upper_faces(const HeldSide& held, double top_z, bool at_or_above) {
   const double tol = tolerances::kIntendedContactMm;
   std::vector<Polygon> faces;
   if (held.plates) {
@@ -86,7 +87,7 @@ std::vector<Polygon> upper_faces(const HeldSide& held, double top_z) {
       const Vec3& u = p.edge[(vertical + 1) % 3];
       const Vec3& v = p.edge[(vertical + 2) % 3];
       const double top = std::max(p.origin.z(), p.origin.z() + p.edge[vertical].z());
-      if (std::fabs(top - top_z) > tol) continue;
+      if (at_or_above ? top < top_z - tol : std::fabs(top - top_z) > tol) continue;
       const Vec2 o(p.origin.x(), p.origin.y()), du(u.x(), u.y()), dv(v.x(), v.y());
       faces.push_back({o, o + du, o + du + dv, o + dv});
     }
@@ -96,7 +97,8 @@ std::vector<Polygon> upper_faces(const HeldSide& held, double top_z) {
       const Vec3& a = (*held.vertices)[f[0]];
       const Vec3& b = (*held.vertices)[f[1]];
       const Vec3& c = (*held.vertices)[f[2]];
-      if (std::fabs(a.z() - top_z) > tol || std::fabs(b.z() - top_z) > tol || std::fabs(c.z() - top_z) > tol) continue;
+      auto off = [&](const Vec3& v) { return at_or_above ? v.z() < top_z - tol : std::fabs(v.z() - top_z) > tol; };
+      if (off(a) || off(b) || off(c)) continue;
       faces.push_back({Vec2(a.x(), a.y()), Vec2(b.x(), b.y()), Vec2(c.x(), c.y())});
     }
   }
@@ -106,7 +108,7 @@ std::vector<Polygon> upper_faces(const HeldSide& held, double top_z) {
 }  // namespace
 
 bool point_on_upper_face(const HeldSide& held, const Vec2& point, double top_z) {
-  for (const Polygon& face : upper_faces(held, top_z))
+  for (const Polygon& face : upper_faces(held, top_z, false))
     if (area(face) > 0.0 && contains(face, point)) return true;
   return false;
 }
@@ -122,7 +124,7 @@ double clamped_area_mm2(const MachineModel& model, const MachineState& state, co
       y1 = std::max(y1, q.x());
     }
   if (!(y1 > y0)) return 0.0;  // a segment with no flat lower face presses on a line at most
-  const std::vector<Polygon> faces = upper_faces(held, clamp_z + low);
+  const std::vector<Polygon> faces = upper_faces(held, clamp_z + low, true);
   double total = 0.0;
   for (std::size_t i = 0; i < model.aba.segment_widths_mm.size(); ++i) {
     if (!state.engaged_segments.empty() && !state.engaged_segments[i]) continue;

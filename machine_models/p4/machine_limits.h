@@ -41,7 +41,8 @@ struct HeldSide {
 // Is the point (x, y) on the held side's upper face at height top_z?
 bool point_on_upper_face(const HeldSide& held, const Vec2& point, double top_z);
 
-// The area of the held side's upper face (at clamp_z) lying under the engaged segments. [mm^2]
+// The area of the held side's faces at or above the segments' lower face (clamp_z) lying under the
+// engaged segments: what they press, or press into (a collision the geometry then reports). [mm^2]
 double clamped_area_mm2(const MachineModel& model, const MachineState& state, const HeldSide& held, double clamp_z);
 
 }  // namespace gk::p4

@@ -375,52 +375,129 @@ Result<SweepOutcome> conservative_advance(const std::vector<SweepPair>& pairs, c
   return out;
 }
 
+namespace {
+
+// A lower bound of the clearance between the body and the convex obstacles while the motion runs
+// from s0 to s1: every point's path stays within the sagitta of its chord, so the sweep lies in
+// the convex hull of the body's plates at s0 and s1 inflated by the sagitta (exactly the hull for
+// a translation). The hull's gap to each obstacle along separating-axis candidates (the
+// obstacle's faces, edge crosses, the plates' faces at both ends and the measured witness
+// directions) bounds its distance from below; second order in the interval, where the
+// Lipschitz bound is first order.
+double hull_lower_bound(const MovingBody& body, const Motion& motion, const std::vector<ConvexPolytope>& obstacles,
+                        double s0, double s1, const Vec3& dir0, const Vec3& dir1) {
+  if (body.plates.empty() || obstacles.empty()) return 0.0;
+  const RigidTransform pose0 = motion.at(s0), pose1 = motion.at(s1);
+  ConvexPolytope hull;
+  std::vector<Vec3> piece_axes;
+  for (const Plate& p : body.plates)
+    for (const RigidTransform* pose : {&pose0, &pose1}) {
+      const Plate q = p.transformed(*pose);
+      for (const Vec3& c : q.corners()) hull.vertices.push_back(c);
+      for (const Vec3& e : q.edge)
+        if (e.norm() > 0.0) piece_axes.push_back(e.normalized());
+    }
+  double sag = 0.0;
+  if (motion.rotation) {
+    const Motion unit{true, motion.axis_point, motion.axis_direction, 1.0, Vec3::Zero()};
+    sag = unit.rate(body.points) * (1.0 - std::cos(0.5 * std::fabs(motion.angle_rad) * (s1 - s0)));
+  }
+  double bound = std::numeric_limits<double>::infinity();
+  for (const ConvexPolytope& o : obstacles) {
+    double gap = 0.0;
+    auto try_axis = [&](const Vec3& axis) {
+      double h_lo = std::numeric_limits<double>::infinity(), h_hi = -h_lo, o_lo = h_lo, o_hi = -h_lo;
+      for (const Vec3& v : hull.vertices) {
+        const double x = axis.dot(v);
+        h_lo = std::min(h_lo, x);
+        h_hi = std::max(h_hi, x);
+      }
+      for (const Vec3& v : o.vertices) {
+        const double x = axis.dot(v);
+        o_lo = std::min(o_lo, x);
+        o_hi = std::max(o_hi, x);
+      }
+      gap = std::max(gap, std::max(o_lo - h_hi, h_lo - o_hi));
+    };
+    for (const Vec3& n : o.face_normals) try_axis(n);
+    for (const Vec3& n : piece_axes) try_axis(n);
+    for (const Vec3& d : {dir0, dir1})
+      if (d.norm() > 0.5) try_axis(d);
+    for (const Vec3& e : piece_axes)
+      for (const Vec3& f : o.edge_directions) {
+        const Vec3 c = e.cross(f);
+        const double len = c.norm();
+        if (len > 1e-9) try_axis(c / len);
+      }
+    bound = std::min(bound, gap - sag);
+    if (bound <= 0.0) return 0.0;
+  }
+  return bound;
+}
+
+}  // namespace
+
 Result<ClearanceBracket> clearance_bracket(const MovingBody& body, const Motion& motion, const SweepOrgan& organ,
-                                           double window_mm, double tolerance_mm, int max_queries) {
+                                           double window_mm, double tolerance_mm, double tolerance_relative, int max_queries,
+                                           double known_upper_mm, const std::vector<ConvexPolytope>* obstacle_shapes) {
   const double rate = motion.rate(body.points);
   ClearanceBracket out;
+  struct Sample {
+    double s = 0.0, d = 0.0;
+    Vec3 dir = Vec3::Zero();  // unit, from the organ's witness to the body's
+  };
   // d(s), capped at the window: a query that finds nothing within it proves d > window.
-  auto measure = [&](double s, double& d) -> Result<bool> {
+  auto measure = [&](double s, Sample& x) -> Result<bool> {
     DistanceRequest req;
     req.upper_bound_mm = std::min(window_mm, out.upper_mm);
     auto r = distance(*body.mesh, motion.at(s), *organ.mesh, organ.pose, req);
     if (!r.ok()) return r.error();
     ++out.queries;
-    d = r.value().found ? r.value().distance_mm : req.upper_bound_mm;
+    x.s = s;
+    x.d = r.value().found ? r.value().distance_mm : req.upper_bound_mm;
+    const Vec3 gap = r.value().point_a - r.value().point_b;
+    x.dir = r.value().found && gap.norm() > 0.0 ? Vec3(gap.normalized()) : Vec3::Zero();
     if (r.value().found && r.value().distance_mm < out.upper_mm) {
       out.upper_mm = r.value().distance_mm;
       out.at_s = s;
       out.point_on_body = r.value().point_a;
+      out.organ_triangle = r.value().triangle_b;
     }
     return true;
   };
   struct Interval {
-    double s0, s1, d0, d1;
-    double lower(double rate) const { return std::max(0.0, 0.5 * (d0 + d1 - rate * (s1 - s0))); }
+    Sample a, b;
+    double lower = 0.0;
   };
-  double d0 = 0.0, d1 = 0.0;
-  if (auto m = measure(0.0, d0); !m.ok()) return m.error();
-  if (auto m = measure(1.0, d1); !m.ok()) return m.error();
-  std::vector<Interval> open = {{0.0, 1.0, d0, d1}};
-  if (rate == 0.0) open.clear();  // nothing moves: the one measurement is the answer
-  out.lower_mm = std::min(d0, d1);
+  auto make = [&](const Sample& a, const Sample& b) {
+    Interval iv{a, b, std::max(0.0, 0.5 * (a.d + b.d - rate * (b.s - a.s)))};
+    if (obstacle_shapes) iv.lower = std::max(iv.lower, hull_lower_bound(body, motion, *obstacle_shapes, a.s, b.s, a.dir, b.dir));
+    return iv;
+  };
+  Sample first, last;
+  if (auto m = measure(0.0, first); !m.ok()) return m.error();
+  if (auto m = measure(1.0, last); !m.ok()) return m.error();
+  std::vector<Interval> open;
+  if (rate > 0.0) open.push_back(make(first, last));  // nothing moves: the one measurement is the answer
   while (!open.empty()) {
     // Split the interval with the smallest lower bound, until it is close enough to the best
     // measured value, far enough, or the budget is spent.
-    auto worst = std::min_element(open.begin(), open.end(),
-                                  [&](const Interval& a, const Interval& b) { return a.lower(rate) < b.lower(rate); });
-    const double lo = worst->lower(rate);
-    if (lo >= window_mm || out.upper_mm - lo <= tolerance_mm || out.queries >= max_queries) break;
+    auto worst = std::min_element(open.begin(), open.end(), [](const Interval& x, const Interval& y) { return x.lower < y.lower; });
+    const double lo = worst->lower;
+    const double best = std::min({out.upper_mm, known_upper_mm, window_mm});
+    if (lo >= window_mm || best - lo <= std::max(tolerance_mm, tolerance_relative * best) || out.queries >= max_queries) break;
     const Interval iv = *worst;
     open.erase(worst);
-    const double mid = 0.5 * (iv.s0 + iv.s1);
-    double dm = 0.0;
-    if (auto m = measure(mid, dm); !m.ok()) return m.error();
-    open.push_back({iv.s0, mid, iv.d0, dm});
-    open.push_back({mid, iv.s1, dm, iv.d1});
+    // Piyavskii-Shubert: measure where the two cones of the interval's Lipschitz bound meet.
+    const double cone = 0.5 * (iv.a.s + iv.b.s) + 0.5 * (iv.a.d - iv.b.d) / rate;
+    const double margin = 0.05 * (iv.b.s - iv.a.s);
+    Sample mid;
+    if (auto m = measure(std::clamp(cone, iv.a.s + margin, iv.b.s - margin), mid); !m.ok()) return m.error();
+    open.push_back(make(iv.a, mid));
+    open.push_back(make(mid, iv.b));
   }
-  double lower = std::min(out.upper_mm, window_mm);
-  for (const Interval& iv : open) lower = std::min(lower, iv.lower(rate));
+  double lower = std::min({out.upper_mm, window_mm, first.d, last.d});
+  for (const Interval& iv : open) lower = std::min(lower, iv.lower);
   out.lower_mm = lower;
   return out;
 }

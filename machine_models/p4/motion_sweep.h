@@ -9,6 +9,7 @@
 
 #include "kernel/mesh_bvh.h"
 #include "kernel/rigid_transform.h"
+#include "machine_models/p4/convex_polytope.h"
 #include "machine_models/p4/machine_scene.h"
 #include "machine_models/p4/sheet_part.h"
 
@@ -104,17 +105,23 @@ Result<SweepOutcome> conservative_advance(const std::vector<SweepPair>& pairs, c
 
 // The smallest clearance over the whole motion between one body and one organ, bracketed:
 // `lower_mm` is proven (the distance is 1-Lipschitz in the points' positions, which move at most
-// `rate` per unit of s), `upper_mm` was measured at `at_s`. Intervals are split until the bracket
-// is narrower than tolerance_mm, the lower bound reaches window_mm (farther does not matter) or
-// max_queries distance queries were made.
+// `rate` per unit of s), `upper_mm` was measured at `at_s`. Intervals are split (where their two
+// Lipschitz cones meet: Piyavskii-Shubert) until the lower bound is within tolerance_mm (or
+// tolerance_relative of it, whichever is larger) of the smaller of `upper_mm` and known_upper_mm (a clearance measured elsewhere: this body cannot hold
+// the minimum then), reaches window_mm (farther does not matter) or max_queries were made. With
+// the organ's convex pieces (obstacle_shapes, machine coordinates) and a body made of plates, an
+// interval is also bounded by its swept hull, which converges much faster near a minimum.
 struct ClearanceBracket {
   double lower_mm = 0.0;
   double upper_mm = std::numeric_limits<double>::infinity();
   double at_s = 0.0;
   Vec3 point_on_body = Vec3::Zero();
+  std::uint32_t organ_triangle = 0;  // the organ's triangle at the measured minimum
   int queries = 0;
 };
 Result<ClearanceBracket> clearance_bracket(const MovingBody& body, const Motion& motion, const SweepOrgan& organ,
-                                           double window_mm, double tolerance_mm, int max_queries);
+                                           double window_mm, double tolerance_mm, double tolerance_relative, int max_queries,
+                                           double known_upper_mm = std::numeric_limits<double>::infinity(),
+                                           const std::vector<ConvexPolytope>* obstacle_shapes = nullptr);
 
 }  // namespace gk::p4

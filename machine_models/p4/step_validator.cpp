@@ -824,39 +824,87 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
     return answer;
   }
 
-  // The clearance over the whole motion: the advanced pieces' proven bounds, then the nearest
-  // pairs narrowed to a bracket within the query budget.
+  // The clearance over the whole motion. Every pair has a proven lower bound (the hull's gap, or
+  // the advancement's); the bodies whose bound is below the report window are then narrowed to a
+  // bracket against all their obstacles at once (one mesh of them in machine coordinates: the
+  // minimum over many equal segments costs one query per sample, not one per segment).
   t = Clock::now();
-  struct Candidate {
+  if (out.min_clearance_organ >= 0)
+    measured(out.min_clearance_mm, pairs[sweep_owner[out.min_clearance_organ]].obstacle->name, out.min_clearance_point);
+  struct Group {  // a body version and the obstacles it meets
+    const StepBody* body;
+    const MovingBody* version;
+    std::vector<const Obstacle*> obstacles;
+    std::shared_ptr<MeshBvh> merged;
+    std::vector<const Obstacle*> owner_of_triangle;
+    std::vector<ConvexPolytope> shapes;
+  };
+  std::vector<Group> groups;
+  auto group_of = [&](const Pair& p) {
+    for (std::size_t g = 0; g < groups.size(); ++g)
+      if (groups[g].body == p.body && groups[g].version == p.version) return g;
+    groups.push_back({p.body, p.version, {}, nullptr, {}, {}});
+    return groups.size() - 1;
+  };
+  std::vector<std::size_t> pair_group(pairs.size());
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    pair_group[i] = group_of(pairs[i]);
+    groups[pair_group[i]].obstacles.push_back(pairs[i].obstacle);
+  }
+  struct Target {  // a moving body (a version or one of its pieces) and its group's lower bound
     const MovingBody* body;
-    SweepOrgan organ;
+    std::size_t group;
     double lower;
   };
-  std::vector<Candidate> candidates;
-  for (std::size_t i = 0; i < pairs.size(); ++i) {
-    if (narrow[i]) continue;
-    candidates.push_back({pairs[i].version, {static_cast<int>(i), pairs[i].obstacle->mesh, pairs[i].obstacle->pose}, pair_lower[i]});
-  }
-  if (!sweep_pairs.empty()) {
-    for (std::size_t k = 0; k < sweep_pairs.size(); ++k)
-      candidates.push_back({sweep_pairs[k].body, sweep_pairs[k].organ, out.pair_lower_mm[k]});
-    if (out.min_clearance_organ >= 0)
-      measured(out.min_clearance_mm, pairs[sweep_owner[out.min_clearance_organ]].obstacle->name, out.min_clearance_point);
-  }
-  std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) { return a.lower < b.lower; });
+  std::vector<Target> targets;
+  auto lower_target = [&](const MovingBody* body, std::size_t group, double lower) {
+    for (Target& x : targets)
+      if (x.body == body) {
+        x.lower = std::min(x.lower, lower);
+        return;
+      }
+    targets.push_back({body, group, lower});
+  };
+  for (std::size_t i = 0; i < pairs.size(); ++i)
+    if (!narrow[i]) lower_target(pairs[i].version, pair_group[i], pair_lower[i]);
+  for (std::size_t k = 0; k < sweep_pairs.size(); ++k)
+    lower_target(sweep_pairs[k].body, pair_group[sweep_owner[k]], out.pair_lower_mm[k]);
+  std::sort(targets.begin(), targets.end(), [](const Target& x, const Target& y) { return x.lower < y.lower; });
   int budget = options_.clearance_query_budget;
-  for (Candidate& c : candidates) {
-    const double tolerance = std::max(tolerances::kClearanceBracketMm,
-                                      tolerances::kClearanceBracketRelative * std::min(answer.min_clearance_mm, window));
-    if (budget <= 0 || c.lower >= std::min(answer.min_clearance_mm, window) - tolerance) break;
-    auto bracket = clearance_bracket(*c.body, prep.motion, c.organ, window, tolerance, budget);
+  for (Target& x : targets) {
+    const double best = std::min(answer.min_clearance_mm, window);
+    const double tolerance = std::max(tolerances::kClearanceBracketMm, tolerances::kClearanceBracketRelative * best);
+    if (budget <= 0 || x.lower >= best - tolerance) continue;
+    Group& g = groups[x.group];
+    if (!g.merged) {
+      std::vector<Vec3> vertices;
+      std::vector<TriangleMesh::Face> faces;
+      for (const Obstacle* ob : g.obstacles) {
+        const TriangleMesh& m = ob->mesh->mesh();
+        const auto base = static_cast<std::uint32_t>(vertices.size());
+        for (const Vec3& v : m.vertices()) vertices.push_back(ob->pose.apply(v));
+        for (const TriangleMesh::Face& f : m.faces()) {
+          faces.push_back({base + f[0], base + f[1], base + f[2]});
+          g.owner_of_triangle.push_back(ob);
+        }
+        g.shapes.push_back(ob->shape);
+      }
+      auto merged = TriangleMesh::create(std::move(vertices), std::move(faces));
+      if (!merged.ok()) return merged.error();
+      auto bvh = MeshBvh::build(std::make_shared<const TriangleMesh>(std::move(merged).value()));
+      if (!bvh.ok()) return bvh.error();
+      g.merged = bvh.value();
+    }
+    auto bracket = clearance_bracket(*x.body, prep.motion, {-1, g.merged.get(), RigidTransform{}}, window, tolerances::kClearanceBracketMm,
+                                     tolerances::kClearanceBracketRelative, budget, answer.min_clearance_mm, &g.shapes);
     if (!bracket.ok()) return bracket.error();
     budget -= bracket.value().queries;
-    c.lower = std::max(c.lower, bracket.value().lower_mm);
+    x.lower = std::max(x.lower, bracket.value().lower_mm);
     if (bracket.value().upper_mm < std::numeric_limits<double>::infinity())
-      measured(bracket.value().upper_mm, pairs[c.organ.index].obstacle->name, bracket.value().point_on_body);
+      measured(bracket.value().upper_mm, g.owner_of_triangle[bracket.value().organ_triangle]->name,
+               bracket.value().point_on_body);
   }
-  for (const Candidate& c : candidates) lower_bound = std::min(lower_bound, c.lower);
+  for (const Target& x : targets) lower_bound = std::min(lower_bound, x.lower);
   answer.times.clearance_us = us_since(t);
   const bool narrowed = !sweep_pairs.empty();
   return finish_clear(narrowed ? Stage::kNarrow : Stage::kHullLod,

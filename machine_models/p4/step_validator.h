@@ -96,7 +96,7 @@ struct StepAnswer {
 struct ValidatorOptions {
   double required_clearance_mm = tolerances::kStepClearanceMm;
   double hull_sample_step_deg = 15.0;     // largest angle between hull samples
-  int clearance_query_budget = 64;        // distance queries spent narrowing a CLEAR step's clearance
+  int clearance_query_budget = 96;         // distance queries spent narrowing a CLEAR step's clearance
   bool compute_corrections = true;
   std::size_t memo_capacity = 100000;
 };

@@ -4,6 +4,7 @@
 #include "machine_models/p4/machine_scene.h"
 #include "machine_models/p4/plate_shapes.h"
 #include "machine_models/p4/step_validator.h"
+#include "tests/machine_models/p4_test_engine.h"
 #include "occt_adapters/shape_import.h"
 #include "occt_adapters/shape_mesher.h"
 #include "tests/support/random_meshes.h"
@@ -18,36 +19,7 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 double deg(double rad) { return rad * 180.0 / kPi; }
 
-struct Engine {
-  std::shared_ptr<MachineScene> scene;
-  std::unique_ptr<StepValidator> validator;
-  MachineModel model;
-};
-
-Engine make_engine(double clamp_z, ValidatorOptions options = {}) {
-  Engine e;
-  e.model = default_machine_model().value();
-  e.scene = MachineScene::build(e.model).value();
-  e.validator = std::make_unique<StepValidator>(e.scene, options);
-  MachineState s;
-  s.clamp_z_mm = clamp_z;
-  s.manipulator_y_mm = -400.0;  // on the held side of the parts below, clear of the blankholder
-  EXPECT_TRUE(e.validator->set_state(s).ok());
-  return e;
-}
-
-SheetPart flat_part(double width, double depth, double t) {
-  return SheetPart::create({width, depth, t, {}, {}}).value();
-}
-
-BendStep bend(StepKind kind, double y_line, double angle) {
-  BendStep s;
-  s.kind = kind;
-  s.bend_point_mm = Vec2(0.0, y_line);
-  s.bend_direction = Vec2(1.0, 0.0);  // the moving side (left of +X) is +Y: y > y_line
-  s.target_angle_deg = angle;
-  return s;
-}
+using namespace testing_engine;
 
 TEST(P4Model, DefaultModelLoadsWithFiftySegmentsOverTheBendLength) {
   auto model = default_machine_model();
@@ -289,6 +261,7 @@ TEST(P4Pipeline, BadInputGivesErrorsNamingTheField) {
 
 namespace gk::p4 {
 namespace {
+using namespace testing_engine;
 
 // A parametric part as its B-Rep tessellation: what a STEP part looks like to the engine.
 SheetPart as_surface_part(const SheetPart& part, double deflection) {
@@ -345,6 +318,7 @@ TEST(P4SurfaceParts, ARealStepSheetMetalPartGoesThroughThePipeline) {
 
 namespace gk::p4 {
 namespace {
+using namespace testing_engine;
 
 TEST(P4Scenarios, RetractingWithAFlangeTallerThanTheOpenBlankholderCatchesIt) {
   const double t = 1.5;

@@ -61,6 +61,12 @@ def aba_span(slots, length):
     return [lo >= -length / 2 + 5.0 and hi <= length / 2 - 5.0 for lo, hi in slots]
 
 
+def grip_y(held_depth):
+    """The manipulator point across the bend line: on the held side, at least 400 mm back (where
+    the rotator column clears the blankholder), within the manipulator's travel."""
+    return max(-2200.0, min(-50.0, -max(400.0, 0.5 * held_depth)))
+
+
 def branch_steps(part, order, slots):
     """Every step of one bend order: for each flange CLAMP and BEND, then ROTATE to the next side."""
     steps = []
@@ -70,8 +76,9 @@ def branch_steps(part, order, slots):
                              tabs=[pb.Tab(**t) for t in part.tabs] if k == 0 else [])
         (px, py), (dx, dy) = bend_line(side, w, d, h)
         length = w if side.startswith("Y") else d
+        held = (d if side.startswith("Y") else w) - h
         state = pb.MachineState(engaged_segments=aba_span(slots, length), clamp_z_mm=part.thickness,
-                                manipulator_y_mm=-600.0)
+                                manipulator_y_mm=grip_y(held))
         base = dict(bend_point=pb.Vec2(x_mm=px, y_mm=py), bend_direction=pb.Vec2(x_mm=dx, y_mm=dy))
         steps.append(("CLAMP " + side, pb.ValidateStepRequest(part=sheet, state=state, step=pb.Step(kind=pb.CLAMP, **base))))
         kind = pb.BEND_UP if angle > 0 else pb.BEND_DOWN
@@ -86,23 +93,21 @@ def branch_steps(part, order, slots):
     return steps
 
 
-def apply_correction(request, correction):
-    """The step changed as the gatekeeper suggests; FLIP turns the bend into an up-bend of the turned part."""
-    fixed = pb.ValidateStepRequest()
-    fixed.CopyFrom(request)
-    c = correction
-    if c.kind == pb.REPO:
-        fixed.step.lateral_shift_mm = c.lateral_shift_mm
-    elif c.kind == pb.CHANGE_ABA:
-        del fixed.state.engaged_segments[:]
-        fixed.state.engaged_segments.extend(c.engaged_segments)
-    elif c.kind == pb.RETRACT_FIRST:
-        fixed.step.retract_mm = c.retract_mm
-    elif c.kind == pb.FLIP:
-        fixed.step.kind = pb.BEND_UP
-        for f in fixed.part.flanges:
-            f.angle_deg = -f.angle_deg
-    return fixed
+def correction_requests(request, correction):
+    """The correction's sub-sequence as requests, each step in its own machine state. FLIP turns
+    the bend into an up-bend of the turned part (its flanges' angles change sign)."""
+    out = []
+    for cs in correction.steps:
+        fixed = pb.ValidateStepRequest()
+        fixed.CopyFrom(request)
+        fixed.step.CopyFrom(cs.step)
+        fixed.state.CopyFrom(cs.state)
+        fixed.skip_corrections = True
+        if cs.part_turned_over:
+            for f in fixed.part.flanges:
+                f.angle_deg = -f.angle_deg
+        out.append(fixed)
+    return out
 
 
 CORRECTION = {pb.CORRECTION_NONE: "-", pb.REPO: "REPO", pb.CHANGE_ABA: "CHANGE_ABA", pb.RETRACT_FIRST: "RETRACT", pb.FLIP: "FLIP"}
@@ -132,14 +137,20 @@ def run_branch(stub, part, order, slots, rows, label):
         if answer.verdict == pb.CLEAR:
             continue
         if answer.verdict == pb.COLLISION and fix.verified and fix.kind != pb.CORRECTION_NONE:
-            retried = stub.ValidateStep(apply_correction(request, fix), timeout=10.0)
-            rows.append((label, name + " + " + CORRECTION[fix.kind], VERDICT[retried.verdict], "", "", "-", ""))
             if fix.kind == pb.FLIP:  # verified by the gatekeeper on the turned-over part
+                rows.append((label, name + " + FLIP", "CLEAR", "", "", "-", ""))
                 side = name.split()[-1]
                 order = [(s, h, abs(a)) if s == side else (s, h, a) for s, h, a in order]
                 corrections += 1
                 continue
-            if retried.verdict == pb.CLEAR:
+            # Run the sub-sequence the gatekeeper verified, step by step, as the machine would.
+            all_clear = True
+            for sub in correction_requests(request, fix):
+                retried = stub.ValidateStep(sub, timeout=10.0)
+                rows.append((label, f"  {CORRECTION[fix.kind]}: {pb.StepKind.Name(sub.step.kind)}",
+                             VERDICT[retried.verdict], "", "", "-", ""))
+                all_clear = all_clear and retried.verdict == pb.CLEAR
+            if all_clear:
                 corrections += 1
                 continue
         return False, corrections, total_us  # pruned
