@@ -37,7 +37,7 @@ pb::ValidateStepRequest request_number(long i) {
   r.mutable_step()->set_target_angle_deg(30.0 + static_cast<double>((i / 251) % 106));
   r.set_skip_corrections(true);
   r.mutable_state()->set_clamp_z_mm(1.5);
-  r.mutable_state()->set_manipulator_y_mm(-600.0);
+  r.mutable_state()->set_manipulator_y_mm(-400.0);
   return r;
 }
 

@@ -108,6 +108,20 @@ GatekeeperService::~GatekeeperService() { pool_.stop(); }
 
 grpc::Status GatekeeperService::validate_one(const pb::ValidateStepRequest& request, const pb::SheetPart* default_part,
                                              const std::string& default_machine, pb::ValidateStepResponse* response) {
+  // Nothing a request carries may escape as an exception: it becomes INTERNAL with what happened.
+  try {
+    return validate_one_unguarded(request, default_part, default_machine, response);
+  } catch (const std::exception& e) {
+    spdlog::error("ValidateStep: unexpected exception: {}", e.what());
+    return {grpc::StatusCode::INTERNAL, std::string("ValidateStep failed: ") + e.what()};
+  } catch (...) {
+    spdlog::error("ValidateStep: unexpected non-standard exception");
+    return {grpc::StatusCode::INTERNAL, "ValidateStep failed: unexpected error"};
+  }
+}
+
+grpc::Status GatekeeperService::validate_one_unguarded(const pb::ValidateStepRequest& request, const pb::SheetPart* default_part,
+                                                       const std::string& default_machine, pb::ValidateStepResponse* response) {
   const auto t0 = Clock::now();
   const std::string machine = request.machine_id().empty() ? default_machine : request.machine_id();
   auto snapshot = machines_.get(machine);
@@ -138,6 +152,8 @@ grpc::Status GatekeeperService::validate_one(const pb::ValidateStepRequest& requ
   if (!part.ok()) return to_status(part.error());
   auto step = to_step(request.step());
   if (!step.ok()) return to_status(step.error());
+  if (auto valid = p4::validate_step(snapshot.value().model, step.value()); !valid.ok())
+    return to_status(invalid_argument("step." + valid.error().field, valid.error().message));
   p4::MachineState state;
   const p4::MachineState* state_ptr = nullptr;
   if (request.has_state()) {

@@ -11,6 +11,9 @@ namespace {
 
 bool is_aba(const std::string& organ) { return organ.rfind("aba.segment.", 0) == 0; }
 
+// How closely the smallest clearing retract is searched: a few validations fewer per halving. [mm]
+constexpr double kRetractResolutionMm = 4.0;
+
 // The x-range of the part's feature at a machine point: the plate nearest to it, placed for the step.
 std::pair<double, double> feature_x_range(const SheetPart& part, const BendStep& step, const Vec3& point) {
   if (part.has_surface()) return {point.x(), point.x()};
@@ -90,7 +93,7 @@ void StepValidator::add_correction(const SheetPart& part, const BendStep& step, 
 
   if (step.kind == StepKind::kRotate) {
     // Pull the manipulator back, turn, and come back: the retract, the rotation and the
-    // re-approach each validated. The smallest retract (to 1 mm) whose rotation clears is found
+    // re-approach each validated. The smallest retract (to 4 mm) whose rotation clears is found
     // first, then grown until the three steps clear together.
     const double max_retract = original.manipulator_y_mm - model.manipulator.travel_y_mm[0];
     auto sequence = [&](double r) {
@@ -113,7 +116,7 @@ void StepValidator::add_correction(const SheetPart& part, const BendStep& step, 
     };
     c.kind = CorrectionKind::kRetract;
     double lo = 0.0, hi = -1.0;
-    for (double r = 1.0; r <= max_retract; r *= 2.0) {
+    for (double r = 16.0; r <= max_retract; r *= 2.0) {
       if (turn_clears(r)) {
         hi = r;
         break;
@@ -125,7 +128,7 @@ void StepValidator::add_correction(const SheetPart& part, const BendStep& step, 
       c.description = "no retract within the manipulator's travel clears the rotation";
       return;
     }
-    while (hi - lo > 1.0) {
+    while (hi - lo > kRetractResolutionMm) {
       const double mid = 0.5 * (lo + hi);
       (turn_clears(mid) ? hi : lo) = mid;
     }
@@ -233,50 +236,41 @@ void StepValidator::add_correction(const SheetPart& part, const BendStep& step, 
     if (bend) steps.push_back({shifted, there, false});
     return steps;
   };
-  auto shifted_clears = [&](double shift) {
+  // Only the step at the new position while searching: with the part held where the clamp holds
+  // it, a clear bend implies a clear clamp. The whole sub-sequence is validated once at the end.
+  auto step_clears = [&](double shift) {
     if (std::fabs(step.lateral_shift_mm + shift) > model.max_bend_length_mm) return false;
-    const std::vector<CorrectionStep> steps = repo_steps(shift);
-    return validate_sequence(part, {steps.begin() + 1, steps.end()});  // the lateral move is checked at the end
+    BendStep shifted = step;
+    shifted.lateral_shift_mm = step.lateral_shift_mm + shift;
+    MachineState there = original;
+    there.manipulator_x_mm += shift;
+    return validate_sequence(part, {{shifted, there, false}});
   };
   auto try_repo = [&]() {
-    for (std::size_t g = 0; g < gaps.size() && g < 3; ++g) {
+    for (std::size_t g = 0; g < gaps.size() && g < 2; ++g) {
       const double design = 0.5 * (gaps[g].first + gaps[g].second) - feature_centre;
-      const double half = 0.5 * (gaps[g].second - gaps[g].first);
-      // The clearing shift nearest the design's: the design itself, or the nearest clearing probe.
+      // The shifts the rule allows: the feature inside the gap, the required clearance from its edges.
+      const double margin = options_.required_clearance_mm + 2.0 * tolerances::kStepContactResolutionMm;
+      double lo = gaps[g].first + margin - fx0, hi = gaps[g].second - margin - fx1;
+      if (lo > hi) continue;
+      // The clearing shift nearest the design's: the design itself, or the nearest of a few probes.
+      std::vector<double> probes = {design, 0.5 * (lo + design), 0.5 * (hi + design), lo, hi};
+      std::sort(probes.begin() + 1, probes.end(), [&](double x, double y) { return std::fabs(x - design) < std::fabs(y - design); });
       double found = std::numeric_limits<double>::quiet_NaN();
-      if (shifted_clears(design)) {
-        found = design;
-      } else {
-        for (double d = 1.0; d <= half && std::isnan(found); d *= 2.0)
-          for (double sign : {-1.0, 1.0})
-            if (std::isnan(found) && shifted_clears(design + sign * d)) found = design + sign * d;
-        if (std::isnan(found)) continue;
-        // Narrow the side towards the design to 0.5 mm.
-        double clear_at = found, blocked_at = design;
-        while (std::fabs(clear_at - blocked_at) > 0.5) {
-          const double mid = 0.5 * (clear_at + blocked_at);
-          (shifted_clears(mid) ? clear_at : blocked_at) = mid;
-        }
-        found = clear_at;
-      }
-      // The interval of clearing shifts around it, each end to 0.5 mm.
-      auto edge = [&](double sign) {
-        double inside = found, outside = found + sign * 1.0;
-        double step_mm = 1.0;
-        while (shifted_clears(outside) && std::fabs(outside - found) < 2.0 * half + 50.0) {
-          inside = outside;
-          step_mm *= 2.0;
-          outside = found + sign * step_mm;
-        }
-        while (std::fabs(outside - inside) > 0.5) {
-          const double mid = 0.5 * (inside + outside);
-          (shifted_clears(mid) ? inside : outside) = mid;
-        }
-        return inside;
+      for (double x : probes)
+        if (std::isnan(found) && x >= lo && x <= hi && step_clears(x)) found = x;
+      if (std::isnan(found)) continue;
+      // The range's ends, validated: an end that does not clear is pulled halfway to the shift
+      // found, three times at most.
+      auto settle = [&](double end) {
+        for (int k = 0; k < 3 && end != found; ++k, end = 0.5 * (end + found))
+          if (step_clears(end)) return end;
+        return found;
       };
-      const double lo = edge(-1.0), hi = edge(1.0);
+      lo = settle(lo);
+      hi = settle(hi);
       std::vector<CorrectionStep> steps = repo_steps(found);
-      if (!validate_sequence(part, steps)) continue;  // the lateral move itself does not clear
+      if (!validate_sequence(part, steps)) continue;  // the lateral move or the clamp does not clear
       c.lateral_shift_mm = step.lateral_shift_mm + found;
       c.shift_design_mm = design;
       c.shift_range_mm[0] = step.lateral_shift_mm + lo;

@@ -381,9 +381,9 @@ namespace {
 // from s0 to s1: every point's path stays within the sagitta of its chord, so the sweep lies in
 // the convex hull of the body's plates at s0 and s1 inflated by the sagitta (exactly the hull for
 // a translation). The hull's gap to each obstacle along separating-axis candidates (the
-// obstacle's faces, edge crosses, the plates' faces at both ends and the measured witness
-// directions) bounds its distance from below; second order in the interval, where the
-// Lipschitz bound is first order.
+// obstacle's faces, the plates' faces at both ends and the measured witness
+// directions: edge crosses are left out, the bound only loosens) bounds its distance from below;
+// second order in the interval, where the Lipschitz bound is first order.
 double hull_lower_bound(const MovingBody& body, const Motion& motion, const std::vector<ConvexPolytope>& obstacles,
                         double s0, double s1, const Vec3& dir0, const Vec3& dir1) {
   if (body.plates.empty() || obstacles.empty()) return 0.0;
@@ -402,9 +402,22 @@ double hull_lower_bound(const MovingBody& body, const Motion& motion, const std:
     const Motion unit{true, motion.axis_point, motion.axis_direction, 1.0, Vec3::Zero()};
     sag = unit.rate(body.points) * (1.0 - std::cos(0.5 * std::fabs(motion.angle_rad) * (s1 - s0)));
   }
+  Aabb hull_box;
+  for (const Vec3& v : hull.vertices) hull_box.extend(v);
   double bound = std::numeric_limits<double>::infinity();
   for (const ConvexPolytope& o : obstacles) {
-    double gap = 0.0;
+    // The boxes' distance bounds the distance from below too: an obstacle whose box is already
+    // farther than the bound so far cannot lower it.
+    Aabb o_box;
+    for (const Vec3& v : o.vertices) o_box.extend(v);
+    double box_sq = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const double g = std::max({0.0, hull_box.min[k] - o_box.max[k], o_box.min[k] - hull_box.max[k]});
+      box_sq += g * g;
+    }
+    const double box_gap = std::sqrt(box_sq);
+    if (box_gap - sag >= bound) continue;
+    double gap = box_gap;
     auto try_axis = [&](const Vec3& axis) {
       double h_lo = std::numeric_limits<double>::infinity(), h_hi = -h_lo, o_lo = h_lo, o_hi = -h_lo;
       for (const Vec3& v : hull.vertices) {
@@ -419,16 +432,13 @@ double hull_lower_bound(const MovingBody& body, const Motion& motion, const std:
       }
       gap = std::max(gap, std::max(o_lo - h_hi, h_lo - o_hi));
     };
-    for (const Vec3& n : o.face_normals) try_axis(n);
-    for (const Vec3& n : piece_axes) try_axis(n);
+    // The witness directions first: near a minimum they are the separating direction itself.
     for (const Vec3& d : {dir0, dir1})
       if (d.norm() > 0.5) try_axis(d);
-    for (const Vec3& e : piece_axes)
-      for (const Vec3& f : o.edge_directions) {
-        const Vec3 c = e.cross(f);
-        const double len = c.norm();
-        if (len > 1e-9) try_axis(c / len);
-      }
+    for (const Vec3& n : o.face_normals)
+      if (gap - sag < bound) try_axis(n);
+    for (const Vec3& n : piece_axes)
+      if (gap - sag < bound) try_axis(n);
     bound = std::min(bound, gap - sag);
     if (bound <= 0.0) return 0.0;
   }
@@ -437,7 +447,7 @@ double hull_lower_bound(const MovingBody& body, const Motion& motion, const std:
 
 }  // namespace
 
-Result<ClearanceBracket> clearance_bracket(const MovingBody& body, const Motion& motion, const SweepOrgan& organ,
+Result<ClearanceBracket> clearance_bracket(const MovingBody& body, const Motion& motion, const std::vector<SweepOrgan>& organs,
                                            double window_mm, double tolerance_mm, double tolerance_relative, int max_queries,
                                            double known_upper_mm, const std::vector<ConvexPolytope>* obstacle_shapes) {
   const double rate = motion.rate(body.points);
@@ -446,22 +456,29 @@ Result<ClearanceBracket> clearance_bracket(const MovingBody& body, const Motion&
     double s = 0.0, d = 0.0;
     Vec3 dir = Vec3::Zero();  // unit, from the organ's witness to the body's
   };
-  // d(s), capped at the window: a query that finds nothing within it proves d > window.
+  // d(s) to the nearest organ, capped at the window: a query that finds nothing within it proves
+  // d > window. Each organ's query is bounded by the nearest found so far (most end at the root).
   auto measure = [&](double s, Sample& x) -> Result<bool> {
-    DistanceRequest req;
-    req.upper_bound_mm = std::min(window_mm, out.upper_mm);
-    auto r = distance(*body.mesh, motion.at(s), *organ.mesh, organ.pose, req);
-    if (!r.ok()) return r.error();
-    ++out.queries;
+    const RigidTransform pose = motion.at(s);
     x.s = s;
-    x.d = r.value().found ? r.value().distance_mm : req.upper_bound_mm;
-    const Vec3 gap = r.value().point_a - r.value().point_b;
-    x.dir = r.value().found && gap.norm() > 0.0 ? Vec3(gap.normalized()) : Vec3::Zero();
-    if (r.value().found && r.value().distance_mm < out.upper_mm) {
-      out.upper_mm = r.value().distance_mm;
-      out.at_s = s;
-      out.point_on_body = r.value().point_a;
-      out.organ_triangle = r.value().triangle_b;
+    x.d = std::min(window_mm, out.upper_mm);
+    x.dir = Vec3::Zero();
+    ++out.queries;
+    for (std::size_t i = 0; i < organs.size(); ++i) {
+      DistanceRequest req;
+      req.upper_bound_mm = x.d;
+      auto r = distance(*body.mesh, pose, *organs[i].mesh, organs[i].pose, req);
+      if (!r.ok()) return r.error();
+      if (!r.value().found || r.value().distance_mm >= x.d) continue;
+      x.d = r.value().distance_mm;
+      const Vec3 gap = r.value().point_a - r.value().point_b;
+      x.dir = gap.norm() > 0.0 ? Vec3(gap.normalized()) : Vec3::Zero();
+      if (x.d < out.upper_mm) {
+        out.upper_mm = x.d;
+        out.at_s = s;
+        out.point_on_body = r.value().point_a;
+        out.organ = static_cast<int>(i);
+      }
     }
     return true;
   };

@@ -103,7 +103,8 @@ struct SweepPair {
 Result<SweepOutcome> conservative_advance(const std::vector<SweepPair>& pairs, const Motion& motion,
                                           const AdvanceOptions& options);
 
-// The smallest clearance over the whole motion between one body and one organ, bracketed:
+// The smallest clearance over the whole motion between one body and the nearest of the organs,
+// bracketed:
 // `lower_mm` is proven (the distance is 1-Lipschitz in the points' positions, which move at most
 // `rate` per unit of s), `upper_mm` was measured at `at_s`. Intervals are split (where their two
 // Lipschitz cones meet: Piyavskii-Shubert) until the lower bound is within tolerance_mm (or
@@ -116,10 +117,10 @@ struct ClearanceBracket {
   double upper_mm = std::numeric_limits<double>::infinity();
   double at_s = 0.0;
   Vec3 point_on_body = Vec3::Zero();
-  std::uint32_t organ_triangle = 0;  // the organ's triangle at the measured minimum
-  int queries = 0;
+  int organ = -1;   // index into the organ list of the nearest one at the measured minimum
+  int queries = 0;  // samples of s measured (each against every organ)
 };
-Result<ClearanceBracket> clearance_bracket(const MovingBody& body, const Motion& motion, const SweepOrgan& organ,
+Result<ClearanceBracket> clearance_bracket(const MovingBody& body, const Motion& motion, const std::vector<SweepOrgan>& organs,
                                            double window_mm, double tolerance_mm, double tolerance_relative, int max_queries,
                                            double known_upper_mm = std::numeric_limits<double>::infinity(),
                                            const std::vector<ConvexPolytope>* obstacle_shapes = nullptr);

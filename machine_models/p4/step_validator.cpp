@@ -30,7 +30,10 @@ bool is_bend(StepKind k) { return k == StepKind::kBendUp || k == StepKind::kBend
 Result<MovingBody> make_body(TriangleMesh mesh, std::vector<Plate> plates) {
   MovingBody body;
   body.points = mesh.vertices();
-  auto bvh = MeshBvh::build(std::make_shared<const TriangleMesh>(std::move(mesh)));
+  // A few boxes' worth of triangles: leaves of 4 build several times faster and query as fast.
+  BvhBuildOptions options;
+  options.leaf_size = 4;
+  auto bvh = MeshBvh::build(std::make_shared<const TriangleMesh>(std::move(mesh)), options);
   if (!bvh.ok()) return bvh.error();
   body.mesh = bvh.value();
   body.plates = std::move(plates);
@@ -140,7 +143,9 @@ const char* to_string(CorrectionKind kind) {
 struct StepBody {
   std::string name;                // "part", "flange", "manipulator"
   MovingBody whole;
-  std::vector<MovingBody> pieces;  // for advancement: radial bands of the plates (or the whole body)
+  // For advancement: radial bands of the plates (or the whole body), cut on first use since most
+  // answers are settled before the narrow phase.
+  mutable std::vector<MovingBody> pieces;
   bool moves = false;              // swept by the motion; otherwise held still through the step
   bool rests_on_supports = false;  // its lower face lies on the supports' top faces
   bool pressed_by_aba = false;     // its upper face is pressed by the engaged segments
@@ -166,7 +171,7 @@ struct Obstacle {
 // What a step needs before any organ is looked at. Cached per part, step and state.
 struct StepValidator::Prepared {
   std::vector<StepBody> bodies;
-  std::vector<std::shared_ptr<MeshBvh>> manipulator_meshes;  // bends: the manipulator as obstacles
+  mutable std::vector<std::shared_ptr<MeshBvh>> manipulator_meshes;  // bends: the manipulator as obstacles
   std::vector<Plate> manipulator_plates;
   std::vector<Plate> part_plates;  // every plate of the part, placed (for naming features)
   Motion motion;
@@ -323,6 +328,13 @@ Result<std::shared_ptr<const StepValidator::Prepared>> StepValidator::prepare(co
                                            "lower face is at z = " + std::to_string(prep.pressing_plane_z) +
                                            " mm, the sheet's upper face at " + std::to_string(t) + " mm)");
 
+  auto keep = [&]() {
+    if (prepared_.size() >= options_.memo_capacity) prepared_.clear();
+    prepared_[key] = prepared;
+    return std::shared_ptr<const Prepared>(prepared);
+  };
+  if (prep.limit.limit != MachineLimit::kNone) return keep();  // denied: no geometry needed
+
   // The bodies.
   std::vector<double> support_tops;
   for (const Organ& o : scene_->organs())
@@ -361,18 +373,6 @@ Result<std::shared_ptr<const StepValidator::Prepared>> StepValidator::prepare(co
     auto whole = make_body(std::move(mesh), plates);
     if (!whole.ok()) return whole.error();
     b.whole = std::move(whole).value();
-    if (moves && prep.motion.rotation && !plates.empty()) {
-      // Advancement steps by the fastest point of a body: cutting the plates into bands of growing
-      // distance from the rotation axis lets the slow band next to a tool take long steps.
-      for (const Plate& plate : plates)
-        for (const Plate& band : radial_bands(plate, prep.motion)) {
-          auto piece = make_body(plates_mesh({band}), {band});
-          if (!piece.ok()) return piece.error();
-          b.pieces.push_back(std::move(piece).value());
-        }
-    } else {
-      b.pieces.push_back(b.whole);
-    }
     prep.bodies.push_back(std::move(b));
     return true;
   };
@@ -399,18 +399,12 @@ Result<std::shared_ptr<const StepValidator::Prepared>> StepValidator::prepare(co
   for (Plate& p : manipulator) p = p.transformed(pre);
   if (auto r = add_body("manipulator", plates_mesh(manipulator), manipulator, in_plane, false, false); !r.ok()) return r.error();
   if (bend) {
-    // The flange turns past the manipulator holding the part: each of its plates is an obstacle.
-    for (const Plate& p : manipulator) {
-      auto bvh = MeshBvh::build(std::make_shared<const TriangleMesh>(plates_mesh({p})));
-      if (!bvh.ok()) return bvh.error();
-      prep.manipulator_meshes.push_back(bvh.value());
-    }
+    // The flange turns past the manipulator holding the part: each of its plates is an obstacle
+    // (meshed when the flange's sweep comes near it).
     prep.manipulator_plates = manipulator;
+    prep.manipulator_meshes.resize(manipulator.size());
   }
-
-  if (prepared_.size() >= options_.memo_capacity) prepared_.clear();
-  prepared_[key] = prepared;
-  return std::shared_ptr<const Prepared>(prepared);
+  return keep();
 }
 
 Result<StepAnswer> StepValidator::validate(const SheetPart& part, const BendStep& step) {
@@ -512,6 +506,8 @@ const MovingBody* version_for(const StepBody& body, const Obstacle& obstacle) {
 // Does the body (version) start inside the obstacle, or the obstacle inside it? Penetration beyond
 // the contact layer's tolerance (for intended contact) or any at all otherwise.
 bool starts_inside(const StepBody& body, const MovingBody& version, const Obstacle& obstacle, double& depth) {
+  depth = 0.0;
+  if (!body.whole.mesh->root_bounds().overlaps(obstacle.box)) return false;
   const bool intended = (obstacle.support && body.rests_on_supports) || (obstacle.pressing && body.pressed_by_aba);
   depth = depth_at(body.whole, RigidTransform{}, obstacle.shape);
   if (body.whole.plates.empty()) depth = depth_at(version, RigidTransform{}, obstacle.shape);
@@ -697,11 +693,19 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
   for (std::size_t k = 0; k < prep.manipulator_plates.size(); ++k) {
     Obstacle ob;
     ob.name = prep.manipulator_plates[k].label;
+    for (const Vec3& c : prep.manipulator_plates[k].corners()) ob.box.extend(c);
+    if (!ob.box.overlaps(query)) {
+      lower_bound = std::min(lower_bound, box_distance(swept, ob.box));
+      continue;
+    }
+    if (!prep.manipulator_meshes[k]) {
+      auto bvh = MeshBvh::build(std::make_shared<const TriangleMesh>(plates_mesh({prep.manipulator_plates[k]})));
+      if (!bvh.ok()) return bvh.error();
+      prep.manipulator_meshes[k] = bvh.value();
+    }
     ob.mesh = prep.manipulator_meshes[k].get();
-    ob.box = ob.mesh->root_bounds();
     ob.shape = ConvexPolytope::plate(prep.manipulator_plates[k]);
-    if (ob.box.overlaps(query)) obstacles.push_back(std::move(ob));
-    else lower_bound = std::min(lower_bound, box_distance(swept, ob.box));
+    obstacles.push_back(std::move(ob));
   }
   if (step.kind == StepKind::kBendDown) {
     // The cheap lowest-point check: a flange turning down about the X axis reaches its exact
@@ -782,6 +786,21 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
 
   // 5. Narrow phase: conservative advancement of every remaining pair (piece by piece).
   t = Clock::now();
+  for (const StepBody* b : moving) {
+    if (!b->pieces.empty()) continue;
+    if (prep.motion.rotation && !b->whole.plates.empty()) {
+      // Advancement steps by the fastest point of a body: cutting the plates into bands of growing
+      // distance from the rotation axis lets the slow band next to a tool take long steps.
+      for (const Plate& plate : b->whole.plates)
+        for (const Plate& band : radial_bands(plate, prep.motion)) {
+          auto piece = make_body(plates_mesh({band}), {band});
+          if (!piece.ok()) return piece.error();
+          b->pieces.push_back(std::move(piece).value());
+        }
+    } else {
+      b->pieces.push_back(b->whole);
+    }
+  }
   std::vector<SweepPair> sweep_pairs;
   std::vector<std::size_t> sweep_owner;
   for (std::size_t i = 0; i < pairs.size(); ++i) {
@@ -826,8 +845,8 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
 
   // The clearance over the whole motion. Every pair has a proven lower bound (the hull's gap, or
   // the advancement's); the bodies whose bound is below the report window are then narrowed to a
-  // bracket against all their obstacles at once (one mesh of them in machine coordinates: the
-  // minimum over many equal segments costs one query per sample, not one per segment).
+  // bracket against all their obstacles at once (each sample's queries bounded by the nearest so
+  // far, so many equal segments cost little more than one).
   t = Clock::now();
   if (out.min_clearance_organ >= 0)
     measured(out.min_clearance_mm, pairs[sweep_owner[out.min_clearance_organ]].obstacle->name, out.min_clearance_point);
@@ -835,21 +854,23 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
     const StepBody* body;
     const MovingBody* version;
     std::vector<const Obstacle*> obstacles;
-    std::shared_ptr<MeshBvh> merged;
-    std::vector<const Obstacle*> owner_of_triangle;
+    std::vector<SweepOrgan> organs;
     std::vector<ConvexPolytope> shapes;
   };
   std::vector<Group> groups;
   auto group_of = [&](const Pair& p) {
     for (std::size_t g = 0; g < groups.size(); ++g)
       if (groups[g].body == p.body && groups[g].version == p.version) return g;
-    groups.push_back({p.body, p.version, {}, nullptr, {}, {}});
+    groups.push_back({p.body, p.version, {}, {}, {}});
     return groups.size() - 1;
   };
   std::vector<std::size_t> pair_group(pairs.size());
   for (std::size_t i = 0; i < pairs.size(); ++i) {
     pair_group[i] = group_of(pairs[i]);
-    groups[pair_group[i]].obstacles.push_back(pairs[i].obstacle);
+    Group& g = groups[pair_group[i]];
+    g.obstacles.push_back(pairs[i].obstacle);
+    g.organs.push_back({-1, pairs[i].obstacle->mesh, pairs[i].obstacle->pose});
+    g.shapes.push_back(pairs[i].obstacle->shape);
   }
   struct Target {  // a moving body (a version or one of its pieces) and its group's lower bound
     const MovingBody* body;
@@ -875,34 +896,14 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
     const double best = std::min(answer.min_clearance_mm, window);
     const double tolerance = std::max(tolerances::kClearanceBracketMm, tolerances::kClearanceBracketRelative * best);
     if (budget <= 0 || x.lower >= best - tolerance) continue;
-    Group& g = groups[x.group];
-    if (!g.merged) {
-      std::vector<Vec3> vertices;
-      std::vector<TriangleMesh::Face> faces;
-      for (const Obstacle* ob : g.obstacles) {
-        const TriangleMesh& m = ob->mesh->mesh();
-        const auto base = static_cast<std::uint32_t>(vertices.size());
-        for (const Vec3& v : m.vertices()) vertices.push_back(ob->pose.apply(v));
-        for (const TriangleMesh::Face& f : m.faces()) {
-          faces.push_back({base + f[0], base + f[1], base + f[2]});
-          g.owner_of_triangle.push_back(ob);
-        }
-        g.shapes.push_back(ob->shape);
-      }
-      auto merged = TriangleMesh::create(std::move(vertices), std::move(faces));
-      if (!merged.ok()) return merged.error();
-      auto bvh = MeshBvh::build(std::make_shared<const TriangleMesh>(std::move(merged).value()));
-      if (!bvh.ok()) return bvh.error();
-      g.merged = bvh.value();
-    }
-    auto bracket = clearance_bracket(*x.body, prep.motion, {-1, g.merged.get(), RigidTransform{}}, window, tolerances::kClearanceBracketMm,
+    const Group& g = groups[x.group];
+    auto bracket = clearance_bracket(*x.body, prep.motion, g.organs, window, tolerances::kClearanceBracketMm,
                                      tolerances::kClearanceBracketRelative, budget, answer.min_clearance_mm, &g.shapes);
     if (!bracket.ok()) return bracket.error();
     budget -= bracket.value().queries;
     x.lower = std::max(x.lower, bracket.value().lower_mm);
     if (bracket.value().upper_mm < std::numeric_limits<double>::infinity())
-      measured(bracket.value().upper_mm, g.owner_of_triangle[bracket.value().organ_triangle]->name,
-               bracket.value().point_on_body);
+      measured(bracket.value().upper_mm, g.obstacles[bracket.value().organ]->name, bracket.value().point_on_body);
   }
   for (const Target& x : targets) lower_bound = std::min(lower_bound, x.lower);
   answer.times.clearance_us = us_since(t);

@@ -46,7 +46,9 @@ struct Correction {
   CorrectionKind kind = CorrectionKind::kNone;
   double lateral_shift_mm = 0.0;        // REPO: the new lateral shift of the part
   double shift_design_mm = 0.0;         // REPO: the design's shift (gap centre - feature centre)
-  double shift_range_mm[2] = {0, 0};    // REPO: the interval of clearing shifts around the one returned
+  // REPO: the shifts that keep the feature in the gap with the required clearance; the returned
+  // shift and both ends were validated CLEAR (the shifts between them were not each validated).
+  double shift_range_mm[2] = {0, 0};
   double retract_mm = 0.0;              // RETRACT: how far to pull the manipulator back before rotating
   std::vector<bool> engaged_segments;   // CHANGE_ABA: the segments to engage instead
   // What to run instead of the denied step, in order; each was validated and is CLEAR when verified.

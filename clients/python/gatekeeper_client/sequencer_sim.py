@@ -160,7 +160,7 @@ def sample_parts():
     return [
         Part("tray 800x600", 800.0, 600.0, 1.5, [("Y_MAX", 40.0, 90.0), ("Y_MIN", 40.0, 90.0), ("X_MAX", 40.0, 90.0), ("X_MIN", 40.0, 90.0)]),
         Part("panel with a deep return 1200x900", 1200.0, 900.0, 1.5,
-             [("Y_MAX", 60.0, 90.0), ("Y_MIN", 190.0, -90.0), ("X_MAX", 50.0, 90.0)]),
+             [("Y_MAX", 60.0, 90.0), ("Y_MIN", 170.0, -90.0), ("X_MAX", 50.0, 90.0)]),
         Part("cover with a tab 900x600", 900.0, 600.0, 1.0, [("Y_MAX", 50.0, 90.0)],
              tabs=[dict(x_min_mm=440.0, x_max_mm=460.0, y_mm=530.0, height_mm=30.0)]),
     ]

@@ -39,7 +39,7 @@ class DaemonTest(unittest.TestCase):
     def bend(self, flange, angle=90.0):
         return pb.ValidateStepRequest(
             part=pb.SheetPart(width_mm=1000, depth_mm=800, thickness_mm=1.5),
-            state=pb.MachineState(clamp_z_mm=1.5, manipulator_y_mm=-600),
+            state=pb.MachineState(clamp_z_mm=1.5, manipulator_y_mm=-400),
             step=pb.Step(kind=pb.BEND_UP, bend_point=pb.Vec2(y_mm=800 - flange), bend_direction=pb.Vec2(x_mm=1),
                          target_angle_deg=angle))
 
