@@ -36,7 +36,7 @@ pb::ValidateStepRequest bend_request(double flange_mm, double angle_deg) {
   r.mutable_step()->mutable_bend_direction()->set_x_mm(1.0);
   r.mutable_step()->set_target_angle_deg(angle_deg);
   r.mutable_state()->set_clamp_z_mm(1.5);
-  r.mutable_state()->set_manipulator_y_mm(-600.0);
+  r.mutable_state()->set_manipulator_y_mm(-400.0);  // on the held side, behind the blankholder
   return r;
 }
 
@@ -103,14 +103,21 @@ TEST(GatekeeperdE2E, BadInputGetsInvalidArgumentOrNotFoundNamingTheField) {
   std::vector<Case> cases;
   auto nan_angle = bend_request(100.0, std::nan(""));
   cases.push_back({nan_angle, grpc::StatusCode::INVALID_ARGUMENT, "target_angle_deg"});
-  auto too_far = bend_request(100.0, 170.0);
-  cases.push_back({too_far, grpc::StatusCode::INVALID_ARGUMENT, "target_angle_deg"});
+  auto not_a_bend = bend_request(100.0, 190.0);
+  cases.push_back({not_a_bend, grpc::StatusCode::INVALID_ARGUMENT, "step.target_angle_deg"});
+  auto huge_travel = bend_request(100.0, 90.0);
+  huge_travel.mutable_step()->set_kind(pb::APPROACH);
+  huge_travel.mutable_step()->mutable_travel()->set_x_mm(1e308);
+  cases.push_back({huge_travel, grpc::StatusCode::INVALID_ARGUMENT, "step.travel"});
+  auto huge_part = bend_request(100.0, 90.0);
+  huge_part.mutable_part()->set_width_mm(1e8);
+  cases.push_back({huge_part, grpc::StatusCode::INVALID_ARGUMENT, "part.width_mm"});
   auto no_kind = bend_request(100.0, 90.0);
   no_kind.mutable_step()->set_kind(pb::STEP_KIND_UNSPECIFIED);
   cases.push_back({no_kind, grpc::StatusCode::INVALID_ARGUMENT, "step.kind"});
   auto zero_line = bend_request(100.0, 90.0);
   zero_line.mutable_step()->mutable_bend_direction()->set_x_mm(0.0);
-  cases.push_back({zero_line, grpc::StatusCode::INVALID_ARGUMENT, "bend_line.direction"});
+  cases.push_back({zero_line, grpc::StatusCode::INVALID_ARGUMENT, "step.bend_direction"});
   auto bad_state = bend_request(100.0, 90.0);
   bad_state.mutable_state()->add_engaged_segments(true);
   cases.push_back({bad_state, grpc::StatusCode::INVALID_ARGUMENT, "state.engaged_segments"});
@@ -128,6 +135,11 @@ TEST(GatekeeperdE2E, BadInputGetsInvalidArgumentOrNotFoundNamingTheField) {
     EXPECT_EQ(s.error_code(), c.code) << s.error_message();
     EXPECT_NE(s.error_message().find(c.field), std::string::npos) << s.error_message();
   }
+  // A bend the machine cannot make is an answer, not an error: denied with the limit named.
+  ASSERT_TRUE(call(*stub, bend_request(100.0, 170.0), &out).ok());
+  EXPECT_EQ(out.verdict(), pb::INCONCLUSIVE);
+  EXPECT_EQ(out.inconclusive_reason(), pb::MACHINE_LIMIT);
+  EXPECT_EQ(out.limit(), pb::BEND_ANGLE);
   // An oversize message (over gRPC's 4 MiB receive limit) is refused; the daemon keeps serving.
   auto huge = bend_request(100.0, 90.0);
   huge.set_machine_id(std::string(5u << 20, 'x'));

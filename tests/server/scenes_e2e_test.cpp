@@ -242,7 +242,7 @@ TEST(ScenesE2E, AMachineModelFileCanBeAddedAndBadOnesAreRefused) {
   step.mutable_step()->mutable_bend_direction()->set_x_mm(1);
   step.mutable_step()->set_target_angle_deg(90);
   step.mutable_state()->set_clamp_z_mm(1.5);
-  step.mutable_state()->set_manipulator_y_mm(-600);
+  step.mutable_state()->set_manipulator_y_mm(-400);
   grpc::ClientContext vctx;
   pb::ValidateStepResponse answer;
   ASSERT_TRUE(stub->ValidateStep(&vctx, step, &answer).ok());
