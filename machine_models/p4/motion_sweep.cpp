@@ -2,6 +2,7 @@
 
 #include "kernel/convex_hull.h"
 #include "kernel/exact_predicates.h"
+#include "kernel/tolerances.h"
 #include "kernel/mesh_distance.h"
 #include "machine_models/p4/organ_geometry.h"
 
@@ -71,12 +72,13 @@ Aabb swept_bounds(const std::vector<MovingBody>& bodies, const Motion& motion, d
 
 namespace {
 
-// The largest gap between the convex organ and the convex hull along the face normals of both
-// (negative when none separates them): a gap along any unit axis is a lower bound of their
+// The largest gap between the convex organ and the sweep bounded by the convex hull of sampled
+// positions, along the face normals of both (negative when none separates them): a gap along any
+// unit axis, less how far the arcs between samples can stray along it, is a lower bound of their
 // distance, so a gap beyond a bound proves them apart (and rules out either lying inside the
 // other). Edge-edge axes are not tried: an organ they alone would separate goes on to the narrow
 // phase.
-double hull_gap(const HullPolytope& hull, const SweepOrgan& organ, double bound) {
+double hull_gap(const HullPolytope& hull, const SweepOrgan& organ, double sagitta, const Motion& motion) {
   const TriangleMesh& om = organ.mesh->mesh();
   std::vector<Vec3> organ_points;
   organ_points.reserve(om.vertices().size());
@@ -95,8 +97,11 @@ double hull_gap(const HullPolytope& hull, const SweepOrgan& organ, double bound)
       organ_lo = std::min(organ_lo, p);
       organ_hi = std::max(organ_hi, p);
     }
-    best = std::max(best, std::max(organ_lo - hull_hi, hull_lo - organ_hi));
-    return best > bound;
+    // The sampled hull misses the arcs between samples by at most the sagitta, and only across
+    // the rotation axis: along it nothing moves.
+    const double along = motion.rotation ? motion.axis_direction.dot(axis) : 0.0;
+    const double stray = sagitta * std::sqrt(std::max(0.0, 1.0 - along * along));
+    best = std::max(best, std::max(organ_lo - hull_hi, hull_lo - organ_hi) - stray);
   };
   for (std::size_t t = 0; t < om.triangle_count(); ++t) {
     const Triangle tri = om.triangle(t);
@@ -189,9 +194,21 @@ Result<HullLodResult> hull_lod(const std::vector<MovingBody>& bodies, const Moti
       std::fill(cleared.begin(), cleared.end(), 0);
       continue;
     }
+    Aabb hull_box;
+    for (const Vec3& c : hull.value().corners) hull_box.extend(c);
     for (std::size_t i = 0; i < organs.size(); ++i) {
       if (!cleared[i]) continue;
-      const double gap = hull_gap(hull.value(), organs[i], out.sagitta_mm + clearance_mm) - out.sagitta_mm;
+      // Far organs are settled by their boxes (a lower bound too); near ones by separating axes.
+      const Aabb organ_box = transformed_box(organs[i].mesh->root_bounds(), organs[i].pose);
+      double box_sq = 0.0;
+      for (int k = 0; k < 3; ++k) {
+        const double g = std::max({0.0, hull_box.min[k] - organ_box.max[k], organ_box.min[k] - hull_box.max[k]});
+        box_sq += g * g;
+      }
+      const double box_gap = std::sqrt(box_sq) - out.sagitta_mm;
+      const double gap = box_gap >= std::max(clearance_mm, tolerances::kClearanceReportWindowMm)
+                             ? box_gap
+                             : std::max(box_gap, hull_gap(hull.value(), organs[i], out.sagitta_mm, motion));
       cleared[i] = gap > clearance_mm ? 1 : 0;
       out.lower_bound_mm[i] = std::min(out.lower_bound_mm[i], gap);
     }
@@ -417,7 +434,9 @@ double hull_lower_bound(const MovingBody& body, const Motion& motion, const std:
     }
     const double box_gap = std::sqrt(box_sq);
     if (box_gap - sag >= bound) continue;
-    double gap = box_gap;
+    // Along an axis, a point's path strays from its chord by at most the sagitta times the axis's
+    // component across the rotation axis: nothing along the rotation axis itself.
+    double gap = box_gap - sag;
     auto try_axis = [&](const Vec3& axis) {
       double h_lo = std::numeric_limits<double>::infinity(), h_hi = -h_lo, o_lo = h_lo, o_hi = -h_lo;
       for (const Vec3& v : hull.vertices) {
@@ -430,16 +449,18 @@ double hull_lower_bound(const MovingBody& body, const Motion& motion, const std:
         o_lo = std::min(o_lo, x);
         o_hi = std::max(o_hi, x);
       }
-      gap = std::max(gap, std::max(o_lo - h_hi, h_lo - o_hi));
+      const double along = motion.rotation ? motion.axis_direction.dot(axis) : 0.0;
+      const double stray = sag * std::sqrt(std::max(0.0, 1.0 - along * along));
+      gap = std::max(gap, std::max(o_lo - h_hi, h_lo - o_hi) - stray);
     };
     // The witness directions first: near a minimum they are the separating direction itself.
     for (const Vec3& d : {dir0, dir1})
       if (d.norm() > 0.5) try_axis(d);
     for (const Vec3& n : o.face_normals)
-      if (gap - sag < bound) try_axis(n);
+      if (gap < bound) try_axis(n);
     for (const Vec3& n : piece_axes)
-      if (gap - sag < bound) try_axis(n);
-    bound = std::min(bound, gap - sag);
+      if (gap < bound) try_axis(n);
+    bound = std::min(bound, gap);
     if (bound <= 0.0) return 0.0;
   }
   return bound;

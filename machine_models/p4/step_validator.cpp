@@ -787,7 +787,9 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
   // 5. Narrow phase: conservative advancement of every remaining pair (piece by piece).
   t = Clock::now();
   for (const StepBody* b : moving) {
-    if (!b->pieces.empty()) continue;
+    bool needed = false;  // only a body with a pair left for the narrow phase is cut
+    for (std::size_t i = 0; i < pairs.size(); ++i) needed = needed || (narrow[i] && pairs[i].body == b && pairs[i].version == &b->whole);
+    if (!needed || !b->pieces.empty()) continue;
     if (prep.motion.rotation && !b->whole.plates.empty()) {
       // Advancement steps by the fastest point of a body: cutting the plates into bands of growing
       // distance from the rotation axis lets the slow band next to a tool take long steps.

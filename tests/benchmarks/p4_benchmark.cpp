@@ -1,6 +1,6 @@
 // ValidateStep in process, cold (every cache emptied before each step), with every body (part,
 // flange, manipulator) and every organ (supports and parked blade included):
-//   build/tests/benchmarks/p4_benchmark [steps_per_population] [seed]
+//   build/tests/benchmarks/p4_benchmark [steps] [seed] [only_kind, e.g. ROTATE: for profiling]
 // Populations:
 //  - panel: a 2,000 mm panel's bend sequence (clamp, bend up, rotate) on the 50-segment ABA;
 //  - random: random parts, states and steps of every kind (thickness 0.4-3.2 mm, angles to 135
@@ -142,6 +142,7 @@ double time_us(StepValidator& v, const Case& c, bool corrections, StepAnswer* an
 int main(int argc, char** argv) {
   const int count = argc > 1 ? std::atoi(argv[1]) : 3000;
   const unsigned long long seed = argc > 2 ? std::strtoull(argv[2], nullptr, 10) : 20261122ull;
+  const std::string only = argc > 3 ? argv[3] : "";
   const MachineModel model = default_machine_model().value();
   auto scene = MachineScene::build(model).value();
   StepValidator validator(scene);
@@ -159,6 +160,7 @@ int main(int argc, char** argv) {
   std::map<std::string, int> outcomes;
   for (int i = 0; i < count; ++i) {
     const Case c = random_case(rng, model);
+    if (!only.empty() && only != to_string(c.step.kind)) continue;
     StepAnswer a;
     const double us = time_us(validator, c, false, &a);
     if (us < 0.0) {
@@ -181,7 +183,10 @@ int main(int argc, char** argv) {
       denied.push_back(c);
     }
     if (a.verdict == Verdict::kInconclusive) limit.add(us);
-    if (a.verdict == Verdict::kClear && a.decided_by == Stage::kNarrow && a.min_clearance_mm < 1.0) near_miss.add(us);
+    if (a.verdict == Verdict::kClear && a.decided_by == Stage::kNarrow && a.min_clearance_mm < 1.0) {
+      near_miss.add(us);
+      ++outcomes["near miss at " + a.clearance_organ];
+    }
   }
   for (const Case& c : denied) {
     StepAnswer a;
