@@ -42,21 +42,22 @@ ConvexPolytope ConvexPolytope::transformed(const RigidTransform& pose) const {
   return p;
 }
 
+std::pair<double, double> projection(const std::vector<Vec3>& points, const Vec3& axis) {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const Vec3& v : points) {
+    const double p = axis.dot(v);
+    lo = std::min(lo, p);
+    hi = std::max(hi, p);
+  }
+  return {lo, hi};
+}
+
 namespace {
 
 // The signed overlap of the two projections on a unit axis: > 0 overlap, <= 0 a gap of -overlap.
 double overlap_along(const ConvexPolytope& a, const ConvexPolytope& b, const Vec3& axis) {
-  double a_lo = std::numeric_limits<double>::infinity(), a_hi = -a_lo, b_lo = a_lo, b_hi = -a_lo;
-  for (const Vec3& v : a.vertices) {
-    const double p = axis.dot(v);
-    a_lo = std::min(a_lo, p);
-    a_hi = std::max(a_hi, p);
-  }
-  for (const Vec3& v : b.vertices) {
-    const double p = axis.dot(v);
-    b_lo = std::min(b_lo, p);
-    b_hi = std::max(b_hi, p);
-  }
+  const auto [a_lo, a_hi] = projection(a.vertices, axis);
+  const auto [b_lo, b_hi] = projection(b.vertices, axis);
   return std::min(a_hi - b_lo, b_hi - a_lo);
 }
 

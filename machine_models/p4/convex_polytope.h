@@ -8,6 +8,7 @@
 #include "kernel/rigid_transform.h"
 #include "machine_models/p4/sheet_part.h"
 
+#include <utility>
 #include <vector>
 
 namespace gk::p4 {
@@ -21,6 +22,9 @@ struct ConvexPolytope {
   static ConvexPolytope plate(const Plate& plate);
   ConvexPolytope transformed(const RigidTransform& pose) const;
 };
+
+// The interval [min, max] of the points' projections on an axis.
+std::pair<double, double> projection(const std::vector<Vec3>& points, const Vec3& axis);
 
 // The penetration depth of two convex polytopes: 0 when they are apart or only touch, otherwise
 // the length of the shortest translation that separates them. [mm]

@@ -85,18 +85,8 @@ double hull_gap(const HullPolytope& hull, const SweepOrgan& organ, double sagitt
   for (const Vec3& v : om.vertices()) organ_points.push_back(organ.pose.apply(v));
   double best = -std::numeric_limits<double>::infinity();
   auto separated_along = [&](const Vec3& axis) {
-    double hull_lo = std::numeric_limits<double>::infinity(), hull_hi = -hull_lo;
-    for (const Vec3& v : hull.corners) {
-      const double p = axis.dot(v);
-      hull_lo = std::min(hull_lo, p);
-      hull_hi = std::max(hull_hi, p);
-    }
-    double organ_lo = std::numeric_limits<double>::infinity(), organ_hi = -organ_lo;
-    for (const Vec3& v : organ_points) {
-      const double p = axis.dot(v);
-      organ_lo = std::min(organ_lo, p);
-      organ_hi = std::max(organ_hi, p);
-    }
+    const auto [hull_lo, hull_hi] = projection(hull.corners, axis);
+    const auto [organ_lo, organ_hi] = projection(organ_points, axis);
     // The sampled hull misses the arcs between samples by at most the sagitta, and only across
     // the rotation axis: along it nothing moves.
     const double along = motion.rotation ? motion.axis_direction.dot(axis) : 0.0;
@@ -199,13 +189,7 @@ Result<HullLodResult> hull_lod(const std::vector<MovingBody>& bodies, const Moti
     for (std::size_t i = 0; i < organs.size(); ++i) {
       if (!cleared[i]) continue;
       // Far organs are settled by their boxes (a lower bound too); near ones by separating axes.
-      const Aabb organ_box = transformed_box(organs[i].mesh->root_bounds(), organs[i].pose);
-      double box_sq = 0.0;
-      for (int k = 0; k < 3; ++k) {
-        const double g = std::max({0.0, hull_box.min[k] - organ_box.max[k], organ_box.min[k] - hull_box.max[k]});
-        box_sq += g * g;
-      }
-      const double box_gap = std::sqrt(box_sq) - out.sagitta_mm;
+      const double box_gap = hull_box.distance(transformed_box(organs[i].mesh->root_bounds(), organs[i].pose)) - out.sagitta_mm;
       const double gap = box_gap >= std::max(clearance_mm, tolerances::kClearanceReportWindowMm)
                              ? box_gap
                              : std::max(box_gap, hull_gap(hull.value(), organs[i], out.sagitta_mm, motion));
@@ -427,28 +411,14 @@ double hull_lower_bound(const MovingBody& body, const Motion& motion, const std:
     // farther than the bound so far cannot lower it.
     Aabb o_box;
     for (const Vec3& v : o.vertices) o_box.extend(v);
-    double box_sq = 0.0;
-    for (int k = 0; k < 3; ++k) {
-      const double g = std::max({0.0, hull_box.min[k] - o_box.max[k], o_box.min[k] - hull_box.max[k]});
-      box_sq += g * g;
-    }
-    const double box_gap = std::sqrt(box_sq);
+    const double box_gap = hull_box.distance(o_box);
     if (box_gap - sag >= bound) continue;
     // Along an axis, a point's path strays from its chord by at most the sagitta times the axis's
     // component across the rotation axis: nothing along the rotation axis itself.
     double gap = box_gap - sag;
     auto try_axis = [&](const Vec3& axis) {
-      double h_lo = std::numeric_limits<double>::infinity(), h_hi = -h_lo, o_lo = h_lo, o_hi = -h_lo;
-      for (const Vec3& v : hull.vertices) {
-        const double x = axis.dot(v);
-        h_lo = std::min(h_lo, x);
-        h_hi = std::max(h_hi, x);
-      }
-      for (const Vec3& v : o.vertices) {
-        const double x = axis.dot(v);
-        o_lo = std::min(o_lo, x);
-        o_hi = std::max(o_hi, x);
-      }
+      const auto [h_lo, h_hi] = projection(hull.vertices, axis);
+      const auto [o_lo, o_hi] = projection(o.vertices, axis);
       const double along = motion.rotation ? motion.axis_direction.dot(axis) : 0.0;
       const double stray = sag * std::sqrt(std::max(0.0, 1.0 - along * along));
       gap = std::max(gap, std::max(o_lo - h_hi, h_lo - o_hi) - stray);

@@ -95,15 +95,6 @@ double lowest_point_of_rotation(const std::vector<Vec3>& points, const Motion& m
   return lowest;
 }
 
-double box_distance(const Aabb& a, const Aabb& b) {
-  double sq = 0.0;
-  for (int k = 0; k < 3; ++k) {
-    const double gap = std::max({0.0, a.min[k] - b.max[k], b.min[k] - a.max[k]});
-    sq += gap * gap;
-  }
-  return std::sqrt(sq);
-}
-
 }  // namespace
 
 const char* to_string(Stage stage) {
@@ -646,7 +637,7 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
       const Aabb organ_box = box_of(static_cast<int>(i));
       for (const StepBody& b : prep.bodies) {
         const Aabb box = b.moves ? swept : b.whole.mesh->root_bounds();
-        lower_bound = std::min(lower_bound, box_distance(box, organ_box));
+        lower_bound = std::min(lower_bound, box.distance(organ_box));
       }
     }
   };
@@ -695,7 +686,7 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
     ob.name = prep.manipulator_plates[k].label;
     for (const Vec3& c : prep.manipulator_plates[k].corners()) ob.box.extend(c);
     if (!ob.box.overlaps(query)) {
-      lower_bound = std::min(lower_bound, box_distance(swept, ob.box));
+      lower_bound = std::min(lower_bound, swept.distance(ob.box));
       continue;
     }
     if (!prep.manipulator_meshes[k]) {

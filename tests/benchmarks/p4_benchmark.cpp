@@ -150,8 +150,14 @@ int main(int argc, char** argv) {
   Population panel, all, clear, collision, limit, near_miss, denied_corrected;
   std::map<std::string, Population> by_kind;
   const std::vector<Case> sequence = panel_sequence(model);
+  std::vector<Population> panel_steps(sequence.size());
+  std::vector<StepAnswer> panel_answers(sequence.size());
   for (int round = 0; round < 50; ++round)
-    for (const Case& c : sequence) panel.add(time_us(validator, c, false, nullptr));
+    for (std::size_t k = 0; k < sequence.size(); ++k) {
+      const double us = time_us(validator, sequence[k], false, &panel_answers[k]);
+      panel.add(us);
+      panel_steps[k].add(us);
+    }
 
   std::mt19937_64 rng(seed);
   std::vector<Case> denied;
@@ -199,6 +205,15 @@ int main(int argc, char** argv) {
   std::printf("p4_benchmark: %d random steps, seed %llu (cold: every cache emptied before each step)\n", count, seed);
   std::printf("%-24s %6s %9s %9s %9s %9s\n", "population", "count", "p50 us", "p90 us", "p99 us", "max us");
   panel.print("panel sequence");
+  for (std::size_t k = 0; k < sequence.size(); ++k) {
+    const StepAnswer& a = panel_answers[k];
+    char label[160];
+    std::snprintf(label, sizeof label, "  %zu %s: %s by %s, clearance [%.3g, %.3g] mm at %s", k, to_string(sequence[k].step.kind),
+                  to_string(a.verdict), to_string(a.decided_by), a.min_clearance_lower_mm, a.min_clearance_mm,
+                  a.clearance_organ.c_str());
+    std::printf("%s\n", label);
+    panel_steps[k].print("");
+  }
   all.print("random, all");
   for (auto& [kind, p] : by_kind) p.print(("  " + kind).c_str());
   clear.print("  CLEAR");
