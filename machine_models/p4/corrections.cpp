@@ -12,7 +12,7 @@ namespace {
 bool is_aba(const std::string& organ) { return organ.rfind("aba.segment.", 0) == 0; }
 
 // How closely the smallest clearing retract is searched: a few validations fewer per halving. [mm]
-constexpr double kRetractResolutionMm = 4.0;
+constexpr double kRetractResolutionMm = 8.0;
 
 // The x-range of the part's feature at a machine point: the plate nearest to it, placed for the step.
 std::pair<double, double> feature_x_range(const SheetPart& part, const BendStep& step, const Vec3& point) {
@@ -45,6 +45,18 @@ std::pair<double, double> feature_x_range(const SheetPart& part, const BendStep&
 
 }  // namespace
 
+Result<StepAnswer> StepValidator::validate_in_search(const SheetPart& part, const BendStep& step) {
+  if (search_validations_left_ <= 0) {
+    StepAnswer refused;
+    refused.verdict = Verdict::kInconclusive;
+    refused.reason = "the correction search's budget of validations is spent";
+    return refused;
+  }
+  auto a = validate(part, step, false);
+  if (a.ok() && a.value().decided_by != Stage::kCache) --search_validations_left_;
+  return a;
+}
+
 bool StepValidator::validate_sequence(const SheetPart& part, const std::vector<CorrectionStep>& steps) {
   const MachineState original = scene_->state();
   bool clear = true;
@@ -53,7 +65,7 @@ bool StepValidator::validate_sequence(const SheetPart& part, const std::vector<C
       clear = false;
       break;
     }
-    auto r = validate(part, s.step, false);
+    auto r = validate_in_search(part, s.step);
     if (!r.ok() || r.value().verdict != Verdict::kClear) {
       clear = false;
       break;
@@ -68,6 +80,15 @@ void StepValidator::add_correction(const SheetPart& part, const BendStep& step, 
   const MachineState original = scene_->state();
   Correction& c = answer.correction;
   if (answer.collisions.empty()) return;
+  search_validations_left_ = options_.correction_search_budget;
+  // Whatever the search ends with, say so when it ran out of validations.
+  struct Note {
+    const int& left;
+    Correction& c;
+    ~Note() {
+      if (left <= 0 && !c.verified) c.description += " (the search stopped at its budget of validations)";
+    }
+  } note{search_validations_left_, c};
   const StepCollision& hit = answer.collisions.front();
   const bool bend = step.kind == StepKind::kBendUp || step.kind == StepKind::kBendDown;
   const bool part_hit = hit.body == "part" || hit.body == "flange";
@@ -85,7 +106,7 @@ void StepValidator::add_correction(const SheetPart& part, const BendStep& step, 
     up.kind = StepKind::kBendUp;
     c.kind = CorrectionKind::kFlip;
     c.steps = {{up, original, true}};
-    auto r = validate(flipped, up, false);
+    auto r = validate_in_search(flipped, up);
     c.verified = r.ok() && r.value().verdict == Verdict::kClear;
     c.description = c.verified ? "turn the part over and bend up instead" : "turning the part over does not clear it either";
     return;
@@ -93,7 +114,7 @@ void StepValidator::add_correction(const SheetPart& part, const BendStep& step, 
 
   if (step.kind == StepKind::kRotate) {
     // Pull the manipulator back, turn, and come back: the retract, the rotation and the
-    // re-approach each validated. The smallest retract (to 4 mm) whose rotation clears is found
+    // re-approach each validated. The smallest retract (to 8 mm) whose rotation clears is found
     // first, then grown until the three steps clear together.
     const double max_retract = original.manipulator_y_mm - model.manipulator.travel_y_mm[0];
     auto sequence = [&](double r) {
@@ -111,12 +132,12 @@ void StepValidator::add_correction(const SheetPart& part, const BendStep& step, 
     auto turn_clears = [&](double r) {
       BendStep turn = step;
       turn.retract_mm = step.retract_mm + r;
-      auto a = validate(part, turn, false);
+      auto a = validate_in_search(part, turn);
       return a.ok() && a.value().verdict == Verdict::kClear;
     };
     c.kind = CorrectionKind::kRetract;
     double lo = 0.0, hi = -1.0;
-    for (double r = 16.0; r <= max_retract; r *= 2.0) {
+    for (double r = 32.0; r <= max_retract; r *= 2.0) {
       if (turn_clears(r)) {
         hi = r;
         break;
@@ -204,8 +225,8 @@ void StepValidator::add_correction(const SheetPart& part, const BendStep& step, 
       steps = {{clamp_step(step), trial, false}};
       if (bend) steps.push_back({step, trial, false});
       if (!scene_->apply_state(trial).ok()) break;
-      auto clamp_answer = validate(part, clamp_step(step), false);
-      auto r = bend && clamp_answer.ok() && clamp_answer.value().verdict == Verdict::kClear ? validate(part, step, false)
+      auto clamp_answer = validate_in_search(part, clamp_step(step));
+      auto r = bend && clamp_answer.ok() && clamp_answer.value().verdict == Verdict::kClear ? validate_in_search(part, step)
                                                                                              : clamp_answer;
       (void)scene_->apply_state(original);
       if (!r.ok()) break;

@@ -99,6 +99,7 @@ struct ValidatorOptions {
   double required_clearance_mm = tolerances::kStepClearanceMm;
   double hull_sample_step_deg = 15.0;     // largest angle between hull samples
   int clearance_query_budget = 96;         // distance queries spent narrowing a CLEAR step's clearance
+  int correction_search_budget = 16;       // steps validated (memo hits free) while searching a correction
   bool compute_corrections = true;
   std::size_t memo_capacity = 100000;
 };
@@ -128,6 +129,9 @@ class StepValidator {
   // Validates the steps in order, each in its state; true when every one is CLEAR. Restores the
   // scene's state.
   bool validate_sequence(const SheetPart& part, const std::vector<CorrectionStep>& steps);
+  // validate() without corrections, within the correction search's budget (INCONCLUSIVE past it).
+  Result<StepAnswer> validate_in_search(const SheetPart& part, const BendStep& step);
+  int search_validations_left_ = 0;
 
   std::shared_ptr<MachineScene> scene_;
   ValidatorOptions options_;

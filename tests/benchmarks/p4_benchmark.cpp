@@ -194,11 +194,15 @@ int main(int argc, char** argv) {
       ++outcomes["near miss at " + a.clearance_organ];
     }
   }
+  std::map<std::string, Population> by_correction;
   for (const Case& c : denied) {
     StepAnswer a;
     const double us = time_us(validator, c, true, &a);
     if (us < 0.0) continue;
     denied_corrected.add(us);
+    by_correction[std::string(to_string(c.step.kind)) + " -> " + to_string(a.correction.kind) +
+                  (a.correction.verified ? " (verified)" : "")]
+        .add(us);
     verified += a.correction.verified ? 1 : 0;
   }
 
@@ -221,6 +225,7 @@ int main(int argc, char** argv) {
   limit.print("  INCONCLUSIVE (limits)");
   near_miss.print("near miss (< 1 mm)");
   denied_corrected.print("denied + correction");
+  for (auto& [kind, p] : by_correction) p.print(("  " + kind).c_str());
   std::printf("corrections verified: %d of %zu denied steps\n", verified, denied.size());
   const double n = static_cast<double>(std::max<std::size_t>(1, all.us.size()));
   std::printf("random steps, mean per stage (us): prepare %.1f, static %.1f, global box %.1f, broad %.1f, hull %.1f, "

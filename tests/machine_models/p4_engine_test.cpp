@@ -186,8 +186,8 @@ TEST(P4Scenarios, RotationNearATowerCollidesAndTheComputedRetractClearsIt) {
   BendStep retracted = rotate;
   retracted.retract_mm = fix.retract_mm;
   EXPECT_EQ(e.validator->validate(part, retracted).value().verdict, Verdict::kClear);
-  // The retract is the smallest to 4 mm: 5 mm less still collides.
-  retracted.retract_mm = fix.retract_mm - 5.0;
+  // The retract is the smallest to 8 mm: 9 mm less still collides.
+  retracted.retract_mm = fix.retract_mm - 9.0;
   EXPECT_EQ(e.validator->validate(part, retracted).value().verdict, Verdict::kCollision);
 }
 
