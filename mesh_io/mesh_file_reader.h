@@ -1,4 +1,7 @@
-// Reads triangle meshes from files with Assimp (a maintained reader, not a parser of our own).
+// Reads triangle meshes from files: STL, OBJ, OFF and PLY by our own small readers, so that
+// coordinates arrive exactly as written (Assimp reads them in single precision: at 5e4 mm that
+// rounds to 0.004 mm), nothing outside the bytes is opened, and every count and index is checked;
+// glTF with Assimp (its data are float32 by definition: put a factory offset in the pose).
 #pragma once
 
 #include "kernel/status.h"
@@ -10,7 +13,7 @@ namespace gk::mesh_io {
 
 struct ReadOptions {
   MeshBuildOptions build;
-  // Corners closer than this are merged into one vertex (STL stores a soup of triangles). [mm]
+  // Exactly equal corners are merged into one vertex (STL stores a soup of triangles).
   bool merge_identical_vertices = true;
 };
 

@@ -1,0 +1,27 @@
+// Our own readers for the simple mesh formats, so that coordinates arrive exactly as written:
+// text numbers (OBJ, OFF, ASCII PLY, ASCII STL) are parsed straight to the nearest double, binary
+// float32/float64 values (binary STL, binary PLY) are taken exactly. No file is opened beyond the
+// bytes given (an OBJ's mtllib is ignored), every count and index is checked, and errors name the
+// line or element. glTF, whose data are float32 by definition, is read elsewhere.
+#pragma once
+
+#include "kernel/status.h"
+#include "kernel/triangle_mesh.h"
+
+#include <string_view>
+#include <vector>
+
+namespace gk::mesh_io {
+
+// A mesh as read: vertices and triangles (polygons fanned), indices checked against the vertices.
+struct RawMesh {
+  std::vector<Vec3> vertices;
+  std::vector<TriangleMesh::Face> faces;
+};
+
+Result<RawMesh> read_obj(std::string_view bytes);
+Result<RawMesh> read_off(std::string_view bytes);
+Result<RawMesh> read_ply(std::string_view bytes);
+Result<RawMesh> read_stl(std::string_view bytes);  // binary or ASCII, told apart by the byte count
+
+}  // namespace gk::mesh_io

@@ -1,0 +1,68 @@
+// Reading text mesh formats: a line at a time, words separated by blanks, numbers parsed to the
+// nearest double (std::from_chars: correctly rounded, locale-free).
+#pragma once
+
+#include "kernel/status.h"
+
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+namespace gk::mesh_io {
+
+class TextScanner {
+ public:
+  explicit TextScanner(std::string_view text) : text_(text) {}
+
+  // The next line (without its end), false at the end of the text. Counts lines from 1.
+  bool next_line(std::string_view& line) {
+    if (pos_ >= text_.size()) return false;
+    const std::size_t end = text_.find('\n', pos_);
+    line = text_.substr(pos_, end == std::string_view::npos ? std::string_view::npos : end - pos_);
+    pos_ = end == std::string_view::npos ? text_.size() : end + 1;
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    ++line_number_;
+    return true;
+  }
+  std::size_t line_number() const { return line_number_; }
+  std::size_t offset() const { return pos_; }
+
+ private:
+  std::string_view text_;
+  std::size_t pos_ = 0;
+  std::size_t line_number_ = 0;
+};
+
+// The next blank-separated word of `line`, consumed; empty when there is none.
+inline std::string_view next_word(std::string_view& line) {
+  std::size_t start = 0;
+  while (start < line.size() && (line[start] == ' ' || line[start] == '\t')) ++start;
+  std::size_t end = start;
+  while (end < line.size() && line[end] != ' ' && line[end] != '\t') ++end;
+  const std::string_view word = line.substr(start, end - start);
+  line.remove_prefix(end);
+  return word;
+}
+
+// A finite double written as text (a leading '+' allowed); false for anything else.
+inline bool parse_double(std::string_view word, double& out) {
+  if (!word.empty() && word.front() == '+') word.remove_prefix(1);
+  if (word.empty()) return false;
+  const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), out);
+  return ec == std::errc() && end == word.data() + word.size() && std::isfinite(out);
+}
+
+inline bool parse_integer(std::string_view word, long long& out) {
+  if (!word.empty() && word.front() == '+') word.remove_prefix(1);
+  if (word.empty()) return false;
+  const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), out);
+  return ec == std::errc() && end == word.data() + word.size();
+}
+
+inline Error line_error(std::size_t line, const std::string& message) {
+  return invalid_argument("line " + std::to_string(line), message);
+}
+
+}  // namespace gk::mesh_io
