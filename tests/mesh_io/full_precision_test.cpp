@@ -174,5 +174,38 @@ TEST(FullPrecision, CountsAndIndicesThatDoNotMatchTheDataAreErrorsNamingWhere) {
   EXPECT_FALSE(read_mesh_bytes("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", "obj").ok());
 }
 
+TEST(FullPrecision, MutatedFilesComeBackAsMeshesOrErrorsNeverACrash) {
+  // Bytes flipped, cut and duplicated at random in valid files of every format.
+  const Box box{50000.0, 50100.0, 0.0, 100.0, 0.0, 100.0};
+  const std::pair<const char*, std::string> files[] = {
+      {"obj", as_obj(box)}, {"off", as_off(box)}, {"ply", as_ply(box)}, {"stl", as_ascii_stl(box)}};
+  std::uint64_t state = 12345;
+  auto next = [&]() {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<std::size_t>(state >> 33);
+  };
+  int ok = 0, errors = 0;
+  for (const auto& [format, text] : files)
+    for (int trial = 0; trial < 1500; ++trial) {
+      std::string bytes = text;
+      for (int edit = 0, n = 1 + static_cast<int>(next() % 4); edit < n && !bytes.empty(); ++edit) {
+        const std::size_t at = next() % bytes.size();
+        switch (next() % 4) {
+          case 0: bytes[at] = static_cast<char>(next() % 256); break;
+          case 1: bytes.erase(at, 1 + next() % 16); break;
+          case 2: bytes.insert(at, bytes.substr(at, 1 + next() % 32)); break;
+          case 3: bytes.resize(at); break;
+        }
+      }
+      const auto read = read_mesh_bytes(bytes, format);
+      (read.ok() ? ok : errors) += 1;
+      if (!read.ok()) {
+        EXPECT_FALSE(read.error().message.empty());
+      }
+    }
+  EXPECT_GT(errors, 100);
+  EXPECT_GT(ok, 100);
+}
+
 }  // namespace
 }  // namespace gk::mesh_io
