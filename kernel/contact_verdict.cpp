@@ -96,6 +96,13 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
   creq.max_contacts = options.max_contacts;
   auto collided = collide(a, pose_a, b, pose_b, creq);
   if (!collided.ok()) return collided.error();
+  if (oriented && collided.value().truncated) {
+    // Touching or crossing is decided over every pair (thousands of coplanar pairs where a finely
+    // meshed box rests on a plate): the cap applies only to what is reported.
+    creq.max_contacts = std::numeric_limits<std::size_t>::max();
+    collided = collide(a, pose_a, b, pose_b, creq);
+    if (!collided.ok()) return collided.error();
+  }
   CollisionResult& col = collided.value();
   out.stats = col.stats;
 
@@ -128,6 +135,16 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
     }
     out.contacts = std::move(col.contacts);
     out.contacts_truncated = col.truncated;
+    if (out.contacts.size() > options.max_contacts) {
+      // Keep the first crossing pair among those reported.
+      if (out.first_crossing >= static_cast<int>(options.max_contacts) && options.max_contacts > 0) {
+        std::swap(out.contacts[options.max_contacts - 1], out.contacts[static_cast<std::size_t>(out.first_crossing)]);
+        out.first_crossing = static_cast<int>(options.max_contacts) - 1;
+      }
+      out.contacts.resize(options.max_contacts);
+      if (out.first_crossing >= static_cast<int>(out.contacts.size())) out.first_crossing = -1;
+      out.contacts_truncated = true;
+    }
     if (out.crossing_pairs > 0) {
       out.verdict = Verdict::kCollision;
       out.reason = oriented ? std::to_string(out.crossing_pairs) + " triangle pairs cross"
@@ -135,7 +152,7 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
     } else if (decided_on_degenerate > 0) {
       out.verdict = Verdict::kInconclusive;
       out.reason = "contact decided on zero-area triangles only";
-    } else if (col.truncated) {
+    } else if (col.truncated) {  // open meshes only: any contact is a collision there anyway
       out.verdict = Verdict::kInconclusive;
       out.reason = "contact list truncated before every pair was classified";
     } else {
@@ -160,22 +177,46 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
   out.stats.node_pairs_tested += d.stats.node_pairs_tested;
   out.stats.triangle_pairs_tested += d.stats.triangle_pairs_tested;
 
-  // Disjoint surfaces: a closed mesh may still lie wholly inside the other.
-  if (oriented) {
+  // Disjoint surfaces: a body may still lie wholly inside a closed mesh. One point of every
+  // connected body of each mesh is tested against the other when that one is closed, whether or
+  // not the body is closed itself (an open scan inside a crate interferes with it).
+  {
     const RigidTransform b_in_a = relative_transform(pose_a, pose_b);
-    const Vec3 b_vertex_in_a = b_in_a.apply(b.mesh().vertices()[b.mesh().faces()[0][0]]);
-    const Vec3 a_vertex_in_b = b_in_a.inverse().apply(a.mesh().vertices()[a.mesh().faces()[0][0]]);
     // Ray parity through the BVH decides it in O(log n); the winding number (O(n)) only when
     // every ray was degenerate.
     auto inside = [](const MeshBvh& m, const Vec3& p) {
       if (const auto parity = point_inside(m, p)) return *parity;  // false outside its box at once
       return std::fabs(winding_number(m.mesh(), p)) > 0.5;
     };
-    const bool b_inside_a = inside(a, b_vertex_in_a);
-    const bool a_inside_b = !b_inside_a && inside(b, a_vertex_in_b);
+    auto contained_body = [&](const MeshBvh& container, const MeshBvh& body, const RigidTransform& body_in_container,
+                              Vec3& point) {
+      if (!container.mesh().is_closed_oriented()) return false;
+      for (std::uint32_t seed : body.mesh().body_seeds()) {
+        point = body_in_container.apply(body.mesh().vertices()[seed]);
+        if (inside(container, point)) return true;
+      }
+      return false;
+    };
+    Vec3 p = Vec3::Zero();
+    const bool b_inside_a = contained_body(a, b, b_in_a, p);
+    const bool a_inside_b = !b_inside_a && contained_body(b, a, b_in_a.inverse(), p);
     if (b_inside_a || a_inside_b) {
+      // How deep the point lies: its distance to the container's surface.
+      const MeshBvh& container = b_inside_a ? a : b;
+      const RigidTransform& container_pose = b_inside_a ? pose_a : pose_b;
+      auto probe_mesh = TriangleMesh::create({p, p, p}, {{0, 1, 2}});
+      if (probe_mesh.ok()) {
+        auto probe = MeshBvh::build(std::make_shared<const TriangleMesh>(std::move(probe_mesh).value()));
+        if (probe.ok()) {
+          auto depth = distance(container, RigidTransform{}, *probe.value(), RigidTransform{});
+          if (depth.ok()) out.containment_depth_mm = depth.value().distance_mm;
+        }
+      }
       out.verdict = Verdict::kCollision;
-      out.reason = b_inside_a ? "mesh B lies inside mesh A" : "mesh A lies inside mesh B";
+      out.contained = true;
+      out.containment_point = out.point_a = out.point_b = container_pose.apply(p);
+      out.distance_mm = 0.0;
+      out.reason = b_inside_a ? "a body of mesh B lies inside mesh A" : "a body of mesh A lies inside mesh B";
       return out;
     }
   }

@@ -49,7 +49,12 @@ struct VerdictResult {
   std::vector<Contact> contacts;
   std::size_t crossing_pairs = 0;
   int first_crossing = -1;  // index in contacts of the first crossing pair (COLLISION by crossing)
-  bool contacts_truncated = false;  // max_contacts was reached (INCONCLUSIVE if none of them crossed)
+  bool contacts_truncated = false;  // max_contacts was reached: the list is incomplete (the verdict is not)
+  // A body lying wholly inside a closed mesh (COLLISION without crossing surfaces): a point of it
+  // (world coordinates, also point_a/point_b) and how deep that point lies. [mm]
+  bool contained = false;
+  Vec3 containment_point = Vec3::Zero();
+  double containment_depth_mm = 0.0;
   QueryStats stats;
 };
 

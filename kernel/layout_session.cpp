@@ -148,12 +148,7 @@ Result<FrameAnswer> LayoutSession::move_to(const RigidTransform& pose) {
     options.max_contacts = kFirstContacts;
     options.distance_upper_bound_mm = clearance_mm_;
     auto v = assess(*self.mesh, pose, *other.mesh, other.pose, options);
-    if (!v.ok()) return v.error();
-    if (v.value().contacts_truncated && v.value().first_crossing < 0) {
-      options.max_contacts = kAllContacts;
-      v = assess(*self.mesh, pose, *other.mesh, other.pose, options);
-      if (!v.ok()) return v.error();
-    }
+    if (!v.ok()) return v.error();  // assess decides over every pair; the cap is on the contacts listed
     const VerdictResult& r = v.value();
     if (r.first_crossing >= 0)
       crossing_[id] = {r.contacts[r.first_crossing].triangle_a, r.contacts[r.first_crossing].triangle_b};

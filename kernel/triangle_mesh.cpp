@@ -105,6 +105,24 @@ void TriangleMesh::analyse_topology() {
   }
   report_.closed = report_.boundary_edges == 0 && report_.non_manifold_edges == 0;
   report_.consistently_oriented = oriented && report_.non_manifold_edges == 0;
+
+  // Connected bodies by union-find over the vertices the triangles use.
+  std::vector<std::uint32_t> parent(vertices_.size());
+  for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+  auto root = [&](std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (const Face& f : faces_)
+    for (int k = 1; k < 3; ++k) parent[root(f[k])] = root(f[0]);
+  std::vector<char> seen(vertices_.size(), 0);
+  body_seeds_.clear();
+  for (const Face& f : faces_) {
+    const std::uint32_t r = root(f[0]);
+    if (seen[r]) continue;
+    seen[r] = 1;
+    body_seeds_.push_back(f[0]);
+  }
 }
 
 double TriangleMesh::area() const {

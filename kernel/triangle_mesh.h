@@ -45,6 +45,9 @@ class TriangleMesh {
   bool has_degenerate_triangles() const { return degenerate_count_ > 0; }
 
   const MeshReport& report() const { return report_; }
+  // One vertex of every connected body (triangles joined through shared vertices), in order of
+  // first appearance: containment tests need a point of each body, not of the first only.
+  const std::vector<std::uint32_t>& body_seeds() const { return body_seeds_; }
   bool is_closed_oriented() const { return report_.closed && report_.consistently_oriented; }
 
   Aabb bounds() const { return bounds_; }
@@ -66,6 +69,7 @@ class TriangleMesh {
   std::vector<std::uint8_t> degenerate_;
   std::size_t degenerate_count_ = 0;
   MeshReport report_;
+  std::vector<std::uint32_t> body_seeds_;
   Aabb bounds_;
 };
 

@@ -10,12 +10,17 @@
 //    ROTATE rotate_angle_deg about the vertical through (mx, my - retract_mm), APPROACH / RETRACT
 //    travel_mm (the bodies first set back by retract_mm and turned by turned_deg about that point);
 //    clamp-relative organs rise by aba_lift_for_rotation_mm in ROTATE / APPROACH / RETRACT;
-//  - the swept solid of each plate, exactly: the plate, plus the solids swept by its faces
-//    (BRepPrimAPI_MakeRevol / MakePrism of faces), or, for a plate with an edge parallel to the
-//    rotation axis, the revolved (BRepPrimAPI_MakeRevol) edges of its cross-section extruded along
-//    that edge (exact even when the axis runs through the plate, as in ROTATE);
+//  - the swept solid of each plate, exactly: the plate itself plus the solids swept by its faces
+//    (BRepPrimAPI_MakePrism for a travel; BRepPrimAPI_MakeRevol for a turn, each face first split
+//    by the plane through the axis across it, so that no two of its points share a circle and the
+//    revolved face is a valid solid; every piece is checked with BRepCheck_Analyzer and oriented
+//    outwards, since an inside-out piece makes BRepExtrema report 0 for anything outside it);
 //  - clearance: BRepExtrema_DistShapeShape between each swept piece and each organ prism, pruned by
-//    analytic boxes of the swept corners (exact for convex plates) and OCCT Bnd_Boxes.
+//    exact boxes of the swept corners (a linear function over a convex plate's sweep is least at a
+//    swept vertex) and OCCT Bnd_Boxes. A bend's plate with an edge along the bend axis sweeps a
+//    prism along X, as every organ is: their distance is sqrt(gap_x^2 + d_yz^2), d_yz measured by
+//    OCCT once per YZ geometry (against the organ's prism stretched over the plate's X range) and
+//    shared by the 50 identical ABA segments.
 // Intended contact (part / flange on a support's top face; part under an engaged ABA segment in
 // CLAMP and bends) is checked as the policy states: what lies within 0.01 mm of that face plane
 // is the contact; the oracle clips the swept body 0.011 mm beyond the plane (BRepAlgoAPI_Common)
@@ -24,14 +29,28 @@
 //
 // Cases are random, and a good share is steered to near contact: flange lengths against the upper
 // beam / bed / parked blade, tab and side-flange gaps beside engaged segments, tab heights under
-// raised or lifted segments, the rotator column against an engaged segment's front face or a
-// flange bent over it, part corners against the towers while rotating or travelling, parts
-// reaching the reference pin, clamp heights off the sheet by a few hundredths, down flanges in
-// front of the counterblade nose. The clearance targeted is c + delta with delta mostly within
-// +-0.06 mm.
+// raised or lifted segments, the rotator column under an engaged segment's leaning back face,
+// part corners against the towers while rotating or travelling (also turned by turned_deg),
+// parts reaching the reference pin, clamp heights off the sheet by a few hundredths, down flanges
+// in front of the counterblade nose (static, and pulled back towards it in a RETRACT), in all four
+// bend directions for the flange-length cases. The clearance targeted is c + delta with delta
+// mostly within -0.04..+0.08 mm.
 //
-// Count: 2,100 steps (350 of each kind), ~1.5 - 2.5 min in Release on 2 cores; P4_ORACLE_CASES
-// overrides the count, P4_ORACLE_SEED the seed.
+// Conventions the documents leave open, as this oracle reads them:
+//  - rotations are right-handed about +X (bends) and +Z (ROTATE, turned_deg);
+//  - the lift of ROTATE / APPROACH / RETRACT adds to every clamp-relative organ's pose at the
+//    state, so a disengaged segment stands retract_z + lift above the clamp line;
+//  - the parked lower blade is an obstacle in every step but BEND_UP (CLAMP included);
+//  - the manipulator stands on the sheet's upper face z = thickness (not the clamp height), is an
+//    obstacle of a bend's flange only, and is never checked against the part it holds;
+//  - intended contact exempts only the 0.01 mm slab at the face plane: the part above a support's
+//    top face (or below an engaged segment's underside) is not checked against that organ; what
+//    lies beyond the slab must keep the full clearance (a part 0.05 mm below a segment that does not
+//    press it is therefore not required to be a COLLISION).
+//
+// Count: 3,000 steps (500 of each kind), about 1.5 - 1.7 min in Release on this 2-core machine (the
+// validator takes ~2.5 s of it, the oracle the rest). P4_ORACLE_CASES overrides the count,
+// P4_ORACLE_SEED the seed, P4_ORACLE_VERBOSE prints every case with the oracle's nearest pair.
 #include "kernel/tolerances.h"
 #include "machine_models/p4/bend_step.h"
 #include "machine_models/p4/machine_model.h"
@@ -128,10 +147,10 @@ struct OMotion {
 
 // The smallest value of n . x over the points x swept by the plate's corners (for a convex plate
 // this is the smallest over the whole swept solid: a linear function is least at a vertex).
-double sweep_min(const std::vector<Plate>& plates, const OMotion& m, const Vec3& n) {
+double sweep_min_points(const std::vector<Vec3>& points, const OMotion& m, const Vec3& n) {
   double best = kInf;
-  for (const Plate& plate : plates) {
-    for (const Vec3& q : plate.corners()) {
+  {
+    for (const Vec3& q : points) {
       switch (m.kind) {
         case OMotion::kStatic:
           best = std::min(best, n.dot(q));
@@ -161,6 +180,24 @@ double sweep_min(const std::vector<Plate>& plates, const OMotion& m, const Vec3&
     }
   }
   return best;
+}
+
+double sweep_min(const std::vector<Plate>& plates, const OMotion& m, const Vec3& n) {
+  std::vector<Vec3> points;
+  for (const Plate& plate : plates)
+    for (const Vec3& q : plate.corners()) points.push_back(q);
+  return sweep_min_points(points, m, n);
+}
+
+// The box of the points' sweep (of a convex polygon's or polytope's sweep, given its vertices).
+Aabb sweep_box_points(const std::vector<Vec3>& points, const OMotion& m) {
+  Aabb b;
+  for (int k = 0; k < 3; ++k) {
+    const Vec3 e = Vec3::Unit(k);
+    b.min[k] = sweep_min_points(points, m, e);
+    b.max[k] = -sweep_min_points(points, m, -e);
+  }
+  return b;
 }
 
 Aabb sweep_box(const std::vector<Plate>& plates, const OMotion& m) {
@@ -201,8 +238,9 @@ Bnd_Box bnd_of(const TopoDS_Shape& s) {
 struct Piece {
   TopoDS_Shape solid;
   Bnd_Box bnd;
+  Aabb box;  // exact box of the swept piece, from its vertices' sweep
 };
-Piece make_piece(const TopoDS_Shape& s) { return {s, bnd_of(s)}; }
+Piece make_piece(const TopoDS_Shape& s, const Aabb& box) { return {s, bnd_of(s), box}; }
 
 // Does the (infinite) line through p0 along u meet the plate (grown by tol)?
 bool line_meets_plate(const Plate& p, const Vec3& p0, const Vec3& u, double tol) {
@@ -285,7 +323,8 @@ bool check_pieces(std::vector<Piece>& pieces, std::string& why) {
 bool sweep_pieces(const Plate& p, const OMotion& m, std::vector<Piece>& out, std::string& why) {
   out.clear();
   try {
-    out.push_back(make_piece(plate_solid(p)));
+    const std::array<Vec3, 8> corners = p.corners();
+    out.push_back(make_piece(plate_solid(p), sweep_box_points({corners.begin(), corners.end()}, OMotion{})));
     if (m.kind == OMotion::kStatic) return true;
     if (m.kind == OMotion::kTranslate) {
       const Vec3 dir = m.travel.normalized();
@@ -294,13 +333,14 @@ bool sweep_pieces(const Plate& p, const OMotion& m, std::vector<Piece>& out, std
         if (std::abs(n.dot(dir)) < 1e-12) continue;  // sweeps within its own plane
         const Vec3 u = p.edge[(k + 1) % 3], v = p.edge[(k + 2) % 3];
         for (int side = 0; side < 2; ++side) {
-          const TopoDS_Face f = quad_face(p.origin + (side ? p.edge[k] : Vec3::Zero()), u, v);
+          const Vec3 o = p.origin + (side ? p.edge[k] : Vec3::Zero());
+          const TopoDS_Face f = quad_face(o, u, v);
           BRepPrimAPI_MakePrism prism(f, gvec(m.travel), Standard_True);
           if (!prism.IsDone()) {
             why = "MakePrism failed";
             return false;
           }
-          out.push_back(make_piece(prism.Shape()));
+          out.push_back(make_piece(prism.Shape(), sweep_box_points({o, o + u, o + u + v, o + v}, m)));
         }
       }
       return check_pieces(out, why);
@@ -333,7 +373,7 @@ bool sweep_pieces(const Plate& p, const OMotion& m, std::vector<Piece>& out, std
             why = "MakeRevol(face) failed";
             return false;
           }
-          out.push_back(make_piece(revol.Shape()));
+          out.push_back(make_piece(revol.Shape(), sweep_box_points(poly, m)));
         }
       }
     }
@@ -424,42 +464,66 @@ class Oracle {
       if (r == kSupportFace && sb.min.z() > o.contact_plane - kClip) continue;  // nothing beyond the face
       if (r == kClampFace && sb.max.z() < o.contact_plane + kClip) continue;
       if (sb.distance(o.box) >= out.distance) continue;
-      if (!build(o, out)) return out;
-      const std::vector<Piece>* pieces = get_pieces(bi, pi, out);
-      if (pieces == nullptr) return out;
-      for (std::size_t k = 0; k < pieces->size(); ++k) {
-        const Piece& piece = (*pieces)[k];
-        if (piece.bnd.Distance(o.bnd) >= out.distance) continue;
-        const std::vector<Piece>* parts = &single_;
-        if (r != kFull) {
-          parts = get_clipped(bi, pi, k, r, o.contact_plane, out);
-          if (parts == nullptr) return out;
-        } else {
-          single_.assign(1, piece);
-        }
-        for (const Piece& s : *parts) {
-          if (s.bnd.Distance(o.bnd) >= out.distance) continue;
-          ++queries;
-          try {
-            const double t0 = now_s();
-            BRepExtrema_DistShapeShape dss(s.solid, o.shape, Extrema_ExtFlag_MIN);
-            g_profile.distance_s += now_s() - t0;
-            if (!dss.IsDone()) {
-              out.failed = true;
-              out.why = "BRepExtrema_DistShapeShape failed";
-              return out;
-            }
-            out.distance = std::min(out.distance, dss.Value());
-          } catch (const Standard_Failure& e) {
-            out.failed = true;
-            out.why = std::string("OCCT distance: ") + e.GetMessageString();
-            return out;
-          }
-          if (out.distance <= 0.0) return out;
-        }
+      if (x_product(bi, pi, o)) {
+        // Both are a YZ region times an X interval: the distance is sqrt(gap_x^2 + d_yz^2), d_yz
+        // measured (by OCCT) against the organ's prism stretched over the plate's X range.
+        const double gap_x = std::max({0.0, o.box.min.x() - sb.max.x(), sb.min.x() - o.box.max.x()});
+        if (gap_x >= out.distance) continue;
+        const double cap_yz = std::sqrt(out.distance * out.distance - gap_x * gap_x);
+        const double d_yz = yz_distance(bi, pi, o, r, cap_yz, out);
+        if (out.failed) return out;
+        out.distance = std::min(out.distance, std::sqrt(gap_x * gap_x + d_yz * d_yz));
+      } else {
+        out.distance = std::min(out.distance, plate_distance(bi, pi, o, r, out.distance, out));
+        if (out.failed) return out;
       }
+      if (out.distance <= 0.0) return out;
     }
     return out;
+  }
+
+  // Plate pi of body bi (its sweep, clipped by the rule) against obstacle o; >= cap means "at least".
+  double plate_distance(std::size_t bi, std::size_t pi, Obstacle& o, Rule r, double cap, Measure& out) {
+    double best = cap;
+    if (!build(o, out)) return best;
+    const std::vector<Piece>* pieces = get_pieces(bi, pi, out);
+    if (pieces == nullptr) return best;
+    for (std::size_t k = 0; k < pieces->size(); ++k) {
+      const Piece& piece = (*pieces)[k];
+      if (piece.box.distance(o.box) >= best) continue;
+      if (r == kSupportFace && piece.box.min.z() > o.contact_plane - kClip) continue;
+      if (r == kClampFace && piece.box.max.z() < o.contact_plane + kClip) continue;
+      if (piece.bnd.Distance(o.bnd) >= best) continue;
+      std::vector<Piece> single;
+      const std::vector<Piece>* parts = &single;
+      if (r != kFull) {
+        parts = get_clipped(bi, pi, k, r, o.contact_plane, out);
+        if (parts == nullptr) return best;
+      } else {
+        single.push_back(piece);
+      }
+      for (const Piece& s : *parts) {
+        if (s.box.distance(o.box) >= best || s.bnd.Distance(o.bnd) >= best) continue;
+        ++queries;
+        try {
+          const double t0 = now_s();
+          BRepExtrema_DistShapeShape dss(s.solid, o.shape, Extrema_ExtFlag_MIN);
+          g_profile.distance_s += now_s() - t0;
+          if (!dss.IsDone()) {
+            out.failed = true;
+            out.why = "BRepExtrema_DistShapeShape failed";
+            return best;
+          }
+          best = std::min(best, dss.Value());
+        } catch (const Standard_Failure& e) {
+          out.failed = true;
+          out.why = std::string("OCCT distance: ") + e.GetMessageString();
+          return best;
+        }
+        if (best <= 0.0) return best;
+      }
+    }
+    return best;
   }
 
   const Aabb& swept_box(std::size_t bi, std::size_t pi) {
@@ -470,6 +534,40 @@ class Oracle {
   }
 
  private:
+  // Is the pair a product of YZ regions and X intervals? The plate turns about an X axis (or stays)
+  // and has an edge along X (its swept pieces are then prisms along X), the obstacle is an organ
+  // prism whose pose keeps X.
+  bool x_product(std::size_t bi, std::size_t pi, const Obstacle& o) const {
+    const OBody& b = bodies[bi];
+    if (o.manipulator || b.motion.kind != OMotion::kRotate) return false;
+    if (b.motion.axis.cross(Vec3::UnitX()).norm() > 1e-12) return false;
+    if ((o.pose.rotation - Mat3::Identity()).cwiseAbs().maxCoeff() > 1e-12) return false;
+    for (const Vec3& e : b.plates[pi].edge)
+      if (e.normalized().cross(Vec3::UnitX()).norm() < 1e-9) return true;
+    return false;
+  }
+
+  double yz_distance(std::size_t bi, std::size_t pi, const Obstacle& o, Rule r, double cap, Measure& out) {
+    std::ostringstream key;
+    key << std::setprecision(17) << bi << ' ' << pi << ' ' << static_cast<int>(r) << ' ' << o.contact_plane << ' '
+        << o.pose.translation.y() << ' ' << o.pose.translation.z();
+    for (const Vec2& v : o.profile) key << ' ' << v.x() << ' ' << v.y();
+    auto it = yz_.find(key.str());
+    if (it != yz_.end() && (it->second.first < it->second.second || cap <= it->second.second))
+      return it->second.first;  // exact, or a lower bound at least as large as needed
+    const Aabb& sb = swept_box(bi, pi);
+    Obstacle stretched = o;
+    stretched.name = o.name + " (stretched over the plate)";
+    stretched.x0 = sb.min.x() - 1.0 - o.pose.translation.x();
+    stretched.x1 = sb.max.x() + 1.0 - o.pose.translation.x();
+    stretched.built = false;
+    stretched.box.min.x() = sb.min.x() - 1.0;
+    stretched.box.max.x() = sb.max.x() + 1.0;
+    const double d = plate_distance(bi, pi, stretched, r, cap, out);
+    if (!out.failed) yz_[key.str()] = {d, cap};
+    return d;
+  }
+
   bool build(Obstacle& o, Measure& out) {
     if (o.built) return true;
     try {
@@ -551,7 +649,10 @@ class Oracle {
           out.why = "BRepAlgoAPI_Common failed";
           return nullptr;
         }
-        for (const TopoDS_Shape& s : solids_of(common.Shape())) result.push_back(make_piece(s));
+        Aabb cut_box = piece.box;
+        if (keep_below) cut_box.max.z() = std::min(cut_box.max.z(), cut);
+        else cut_box.min.z() = std::max(cut_box.min.z(), cut);
+        for (const TopoDS_Shape& sol : solids_of(common.Shape())) result.push_back(make_piece(sol, cut_box));
       } catch (const Standard_Failure& e) {
         out.failed = true;
         out.why = std::string("OCCT clip: ") + e.GetMessageString();
@@ -564,7 +665,7 @@ class Oracle {
   std::map<std::pair<std::size_t, std::size_t>, std::vector<Piece>> pieces_;
   std::map<std::pair<std::size_t, std::size_t>, Aabb> boxes_;
   std::map<std::tuple<std::size_t, std::size_t, std::size_t, int, long long>, std::vector<Piece>> clipped_;
-  std::vector<Piece> single_;
+  std::map<std::string, std::pair<double, double>> yz_;  // d_yz, and the cap it was measured with
 };
 
 // ------------------------------------------------------------------------------------------------
@@ -778,7 +879,7 @@ struct Gen {
   // The clearance a near-contact case aims at.
   double target_gap() {
     const double r = uni(rng, 0.0, 1.0);
-    if (r < 0.7) return c + uni(rng, -0.06, 0.06);
+    if (r < 0.7) return c + uni(rng, -0.04, 0.08);
     if (r < 0.9) return c + uni(rng, -0.5, 0.5);
     return c + uni(rng, -3.0, 3.0);
   }
@@ -1046,7 +1147,7 @@ struct Gen {
   }
 
   // A flat-ish base for the steered scenarios: bend direction (1, 0), no flanges.
-  Case plain_case(StepKind kind, double w, double d, double t, double lf) {
+  Case plain_case(StepKind kind, double w, double d, double t, double lf, int dir = 0) {
     Case c0;
     c0.step.kind = kind;
     Plan p;
@@ -1054,11 +1155,31 @@ struct Gen {
     p.d = d;
     p.t = t;
     p.lf = lf;
-    p.dir = 0;
+    p.dir = dir;
     apply_plan(c0, p);
     c0.state.clamp_z_mm = t;
     return c0;
   }
+
+  // The bend line placed so that lf of the part lies on its moving side.
+  static void set_lf(Case& c0, double lf) {
+    Plan p;
+    p.w = c0.spec.width_mm;
+    p.d = c0.spec.depth_mm;
+    p.t = c0.spec.thickness_mm;
+    p.lf = lf;
+    const Vec2 d = c0.step.bend_direction;
+    p.dir = d.x() > 0.5 ? 0 : (d.x() < -0.5 ? 1 : (d.y() > 0.5 ? 2 : 3));
+    c0.step.bend_point_mm = p.point();
+  }
+
+  // Part sizes for a flange of length lf bent in direction dir, with `behind` mm held behind it.
+  Case sized_case(StepKind kind, double t, double lf, double behind, int dir) {
+    const double across = std::min(dir < 2 ? 1000.0 : 1500.0, lf + behind);
+    const double along = uni(rng, 200.0, dir < 2 ? 1500.0 : 1000.0);
+    return dir < 2 ? plain_case(kind, along, across, t, lf, dir) : plain_case(kind, across, along, t, lf, dir);
+  }
+  int steer_dir() { return chance(rng, 0.6) ? 0 : pick(rng, 4); }
 
   // Secant search for p with f(p) = target; slope is the expected df/dp.
   static double solve(const std::function<double(double)>& f, double p, double target, double slope, int iterations) {
@@ -1280,7 +1401,7 @@ struct Gen {
   }
 
   // ---- CLAMP: a flange bent down at the front edge, hanging just in front of the counterblade ----
-  Case nose_flange() {
+  Case nose_flange(StepKind kind = StepKind::kClamp) {
     const double t = uni(rng, 0.4, 3.2);
     Case c0 = plain_case(StepKind::kClamp, uni(rng, 300.0, 1500.0), uni(rng, 450.0, 1000.0), t, 0.0);
     c0.scenario = "nose_flange";
@@ -1318,7 +1439,30 @@ struct Gen {
       }();
       if (std::isfinite(ymin_low)) line0 = d + (ymin_low - (-0.5 + g));
     }
-    c0.step.bend_point_mm.y() = solve(gap_at, line0, g, -1.0, 3);
+    if (kind == StepKind::kClamp) {
+      c0.step.bend_point_mm.y() = solve(gap_at, line0, g, -1.0, 3);
+      return c0;
+    }
+    // RETRACT: the flange starts a little in front of the nose and is pulled back towards it (the
+    // clearance below the support's top face, in motion).
+    c0.scenario = "nose_retract";
+    c0.step.kind = kind;
+    c0.step.bend_point_mm.y() = line0 - uni(rng, 2.0, 30.0);
+    c0.state.engaged_segments.clear();
+    place_manipulator(c0, 0);
+    const double tx = chance(rng, 0.3) ? uni(rng, -30.0, 30.0) : 0.0;
+    auto gap_travel = [&](double ty) {
+      Case cc = c0;
+      cc.step.travel_mm = Vec3(tx, ty, 0.0);
+      OracleSetup s = build_setup(model, scene, cc);
+      if (!s.ok) return std::nan("");
+      const int o = s.oracle.obstacle_index("counterblade");
+      if (o < 0) return std::nan("");
+      const Measure mm = s.oracle.distance(0, static_cast<std::size_t>(o), kSupportFace, 40.0);
+      return mm.failed ? std::nan("") : mm.distance;
+    };
+    const double ty = solve(gap_travel, -(line0 - c0.step.bend_point_mm.y()), g, 1.0, 3);
+    c0.step.travel_mm = Vec3(tx, std::min(ty, -0.5), 0.0);
     return c0;
   }
 
@@ -1329,12 +1473,12 @@ struct Gen {
     const bool up = kind == StepKind::kBendUp;
     const double reach = up ? 203.0 : 180.0;
     const double l0 = reach / std::sin(rad(std::min(angle, 90.0)));
-    Case c0 = plain_case(kind, uni(rng, 200.0, 1500.0), std::min(1000.0, l0 + uni(rng, 360.0, 600.0)), t, l0);
+    Case c0 = sized_case(kind, t, l0, uni(rng, 360.0, 600.0), steer_dir());
     c0.scenario = up ? "beam_reach" : "bed_reach";
     c0.step.target_angle_deg = angle;
     c0.step.lateral_shift_mm = chance(rng, 0.5) ? 0.0 : uni(rng, -300.0, 300.0);
     c0.state.engaged_segments = {};
-    if (chance(rng, 0.5)) {
+    if (chance(rng, 0.2)) {  // segments sticking out past the part's ends are raised: flanges meet them
       Aabb b;
       if (blank_box(c0, b))
         c0.state.engaged_segments = MachineState::with_aba_span(model, b.min.x() + 10.0, b.max.x() - 10.0, t).engaged_segments;
@@ -1346,14 +1490,13 @@ struct Gen {
     if (oi < 0) return random_case(kind);
     const Aabb ob = s0.oracle.obstacles[static_cast<std::size_t>(oi)].box;
     const double g = target_gap();
-    auto gap_at = [&](double line) {
+    auto gap_at = [&](double lf) {
       Case cc = c0;
-      cc.step.bend_point_mm.y() = line;
+      set_lf(cc, lf);
       if (up) return ob.min.z() + body_extent(cc, "flange", -Vec3::UnitZ());
       return body_extent(cc, "flange", Vec3::UnitZ()) - ob.max.z();
     };
-    const double line = solve(gap_at, c0.spec.depth_mm - l0, g, std::sin(rad(std::min(angle, 90.0))), 4);
-    c0.step.bend_point_mm.y() = line;
+    set_lf(c0, solve(gap_at, l0, g, -std::sin(rad(std::min(angle, 90.0))), 4));
     place_manipulator(c0, 4);
     return c0;
   }
@@ -1361,7 +1504,7 @@ struct Gen {
   // ---- BEND_DOWN: the flange's far corner passes the parked lower blade's corner ----
   Case blade_reach() {
     const double t = uni(rng, 0.4, 3.2);
-    Case c0 = plain_case(StepKind::kBendDown, uni(rng, 200.0, 1500.0), uni(rng, 620.0, 1000.0), t, 240.0);
+    Case c0 = sized_case(StepKind::kBendDown, t, 240.0, uni(rng, 380.0, 760.0), steer_dir());
     c0.scenario = "blade_reach";
     c0.step.target_angle_deg = uni(rng, 32.0, 46.0);
     c0.state.engaged_segments = {};
@@ -1375,9 +1518,9 @@ struct Gen {
     double rb = kInf;
     for (const Vec2& v : blade.profile) rb = std::min(rb, blade.pose.apply(Vec3(0.0, v.x(), v.y())).tail<2>().norm());
     const double g = target_gap();
-    auto gap_at = [&](double line) {
+    auto gap_at = [&](double lf) {
       Case cc = c0;
-      cc.step.bend_point_mm.y() = line;
+      set_lf(cc, lf);
       OracleSetup s = build_setup(model, scene, cc);
       if (!s.ok) return std::nan("");
       const int b = s.oracle.body_index("flange");
@@ -1387,7 +1530,7 @@ struct Gen {
         for (const Vec3& v : p.corners()) r = std::max(r, v.tail<2>().norm());
       return rb - r;
     };
-    c0.step.bend_point_mm.y() = solve(gap_at, c0.spec.depth_mm - (rb - g), g, 1.0, 3);
+    set_lf(c0, solve(gap_at, rb - g, g, -1.0, 3));
     place_manipulator(c0, 4);
     return c0;
   }
@@ -1411,33 +1554,8 @@ struct Gen {
         c0.state.engaged_segments[i] = true;
     const double a = rad(c0.step.target_angle_deg);
     c0.state.manipulator_y_mm = lf * std::cos(a) - model.manipulator.rotator_radius_mm - 0.1;
-    // Steer with the oracle: the flange's sweep against the manipulator's boxes.
-    OracleSetup s = build_setup(model, scene, c0);
-    if (!s.ok) return c0;
-    const int fb = s.oracle.body_index("flange");
-    if (fb < 0) return c0;
-    const double g = target_gap();
-    auto gap_at = [&](double my) {
-      std::vector<Obstacle> obs;
-      for (const auto& [name, plate] : manipulator_boxes(model.manipulator, Vec2(mx, my), 0.0, t)) {
-        Obstacle ob;
-        ob.name = name;
-        ob.manipulator = true;
-        ob.plate = plate;
-        ob.box = sweep_box({plate}, OMotion{});
-        obs.push_back(ob);
-      }
-      s.oracle.obstacles = obs;
-      double best = kInf;
-      for (std::size_t i = 0; i < obs.size(); ++i) {
-        const Measure mm = s.oracle.distance(static_cast<std::size_t>(fb), i, kFull, 30.0);
-        if (mm.failed) return std::nan("");
-        best = std::min(best, mm.distance);
-      }
-      return best;
-    };
-    c0.state.manipulator_y_mm =
-        std::min(-50.0, solve(gap_at, c0.state.manipulator_y_mm, g, -0.7, 4));
+    // The flange's far end at the rotator's front face, give or take a few mm.
+    c0.state.manipulator_y_mm = std::min(-50.0, c0.state.manipulator_y_mm + uni(rng, -3.0, 3.0));
     return c0;
   }
 
@@ -1532,6 +1650,10 @@ struct Gen {
     const bool right = chance(rng, 0.5);
     const double sign = right ? 1.0 : -1.0;
     c0.step.retract_mm = chance(rng, 0.5) ? 0.0 : uni(rng, 0.0, 300.0);
+    if (chance(rng, 0.3)) {  // turned since placed: the tower is reached by another corner
+      const double turns[] = {90.0, -90.0, 180.0, uni(rng, -180.0, 180.0)};
+      c0.step.turned_deg = turns[pick(rng, 4)];
+    }
     const double w = c0.spec.width_mm;
     // The part's near end starts 20..400 mm from the tower.
     c0.step.lateral_shift_mm = sign * (1450.0 - uni(rng, 20.0, 400.0) - 0.5 * w);
@@ -1553,6 +1675,7 @@ struct Gen {
     const double g = target_gap();
     const double tx = right ? (1450.0 - g) - reach : (-1450.0 + g) - reach;
     c0.step.travel_mm.x() = tx;
+    if (std::abs(tx) < 1.0 && std::abs(ty) < 1e-9) c0.step.travel_mm.y() = kind == StepKind::kApproach ? 5.0 : -5.0;
     return c0;
   }
 
@@ -1595,33 +1718,39 @@ struct Gen {
         if (r < 0.87) return clamp_offset(kind);
         return nose_flange();
       case StepKind::kBendUp:
-        if (r < 0.3) return random_case(kind);
-        if (r < 0.55) return flange_reach(kind);
-        if (r < 0.75) return flange_over_manipulator();
-        if (r < 0.85) return tab_gap(kind);
-        if (r < 0.92) return flange_gap(kind);
-        return manip_segment(kind);
+        // (A flange bent back over the manipulator cannot clear it in this machine: the segments
+        // over the manipulator must be raised for the rotator, and a flange long enough to reach
+        // the rotator then meets the raised segments. Kept rare, for the pairs it names.)
+        if (r < 0.25) return random_case(kind);
+        if (r < 0.5) return flange_reach(kind);
+        if (r < 0.55) return flange_over_manipulator();
+        if (r < 0.7) return tab_gap(kind);
+        if (r < 0.82) return flange_gap(kind);
+        if (r < 0.92) return manip_segment(kind);
+        return tab_height(kind);
       case StepKind::kBendDown:
-        if (r < 0.3) return random_case(kind);
-        if (r < 0.55) return flange_reach(kind);
-        if (r < 0.75) return blade_reach();
-        if (r < 0.85) {
+        if (r < 0.25) return random_case(kind);
+        if (r < 0.5) return flange_reach(kind);
+        if (r < 0.65) return blade_reach();
+        if (r < 0.72) {
           Case c0 = random_case(kind);
           c0.scenario = "relief_135";
           c0.step.target_angle_deg = uni(rng, 133.0, 135.0);
           return c0;
         }
-        if (r < 0.93) return tab_gap(kind);
-        return flange_gap(kind);
+        if (r < 0.82) return tab_gap(kind);
+        if (r < 0.9) return flange_gap(kind);
+        return manip_segment(kind);
       case StepKind::kRotate:
         if (r < 0.35) return random_case(kind);
         if (r < 0.7) return rotate_tower();
         return lifted_tab(kind);
       default:
-        if (r < 0.3) return random_case(kind);
-        if (r < 0.55) return travel_tower(kind);
-        if (r < 0.8) return lifted_tab(kind);
-        return travel_pin(kind);
+        if (r < 0.25) return random_case(kind);
+        if (r < 0.5) return travel_tower(kind);
+        if (r < 0.72) return lifted_tab(kind);
+        if (r < 0.86 || kind == StepKind::kApproach) return travel_pin(kind);
+        return nose_flange(kind);
     }
   }
 };
@@ -1669,8 +1798,8 @@ struct KindCounts {
 
 TEST(P4SweptOracle, OracleMeasuresKnownGeometry) {
   // The oracle's own pieces against hand-derived distances.
-  // A 10 x 10 x 1 plate at y in [3, 13] turned 90 degrees up about the X axis through (0, 0, 1):
-  // it ends standing at y in [0, 1]... its far upper corner reaches z = 1 + 13.
+  // A 10 x 10 x 1 plate at y in [3, 13], z in [0, 1], turned 120 degrees up about the X axis
+  // through (0, 0, 1): its far lower corner, sqrt(13^2 + 1) from the axis, passes highest.
   Plate p;
   p.origin = Vec3(0, 3, 0);
   p.edge = {Vec3(10, 0, 0), Vec3(0, 10, 0), Vec3(0, 0, 1)};
@@ -1735,9 +1864,9 @@ TEST(P4SweptOracle, OracleMeasuresKnownGeometry) {
 }
 
 TEST(P4SweptOracle, OracleAgreesWithTheHandDerivedBeamScenario) {
-  // The engine test's beam scenario, through the oracle: a 300 mm flange bent 90 degrees up
-  // reaches the beam 203 mm above the clamp line; a 150 mm one clears it by 203 - sqrt(150^2 + t^2)
-  // measured from the axis... (the far lower corner passes highest).
+  // The engine test's beam scenario, through the oracle (organs from MachineScene, the flange
+  // from SheetPart::split): a 150 mm flange bent 135 degrees up clears the beam, 203 mm above the
+  // clamp line, by 203 - sqrt(150^2 + t^2) (its far lower corner passes highest).
   const MachineModel model = default_machine_model().value();
   auto scene = MachineScene::build(model).value();
   Case c0;
@@ -1768,7 +1897,7 @@ TEST(P4SweptOracle, ValidatorNeverClearsWhatTheOcctSweepReaches) {
   StepValidator validator(validator_scene, options);
   const double c = options.required_clearance_mm;
 
-  int cases = 2100;
+  int cases = 3000;
   if (const char* env = std::getenv("P4_ORACLE_CASES")) cases = std::max(6, std::atoi(env));
   std::uint64_t seed = 20240611;
   if (const char* env = std::getenv("P4_ORACLE_SEED")) seed = std::strtoull(env, nullptr, 10);
@@ -1781,9 +1910,11 @@ TEST(P4SweptOracle, ValidatorNeverClearsWhatTheOcctSweepReaches) {
   std::map<StepKind, KindCounts> counts;
   int false_clears = 0, unconfirmed = 0, unknown_names = 0, oracle_failures = 0;
   int collision_on_contact_not_beyond = 0;  // soft: COLLISION on an intended pair the clipped rule clears
+  int bracket_mismatch = 0;  // soft: a near CLEAR whose oracle clearance lies outside the reported bracket
   std::map<std::string, int> named_pairs;
   double validator_s = 0.0, oracle_s = 0.0, generate_s = 0.0;
   std::map<std::string, double> gen_by_scenario;
+  std::map<StepKind, double> oracle_by_kind;
   long long queries = 0;
   using Clock = std::chrono::steady_clock;
   auto seconds = [](Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); };
@@ -1813,7 +1944,8 @@ TEST(P4SweptOracle, ValidatorNeverClearsWhatTheOcctSweepReaches) {
     validator_s += seconds(t1, t2);
     if (!answer.ok()) {
       ++kc.errors;
-      ++kc.denials["error: " + answer.error().field];
+      if (++kc.denials["error: " + answer.error().field] <= 2)
+        std::cout << "[validator error] " << answer.error().to_string() << "\n" << describe(cs);
       continue;
     }
     const StepAnswer& a = answer.value();
@@ -1825,14 +1957,17 @@ TEST(P4SweptOracle, ValidatorNeverClearsWhatTheOcctSweepReaches) {
     OracleSetup setup = build_setup(model, *oracle_scene, cs);
     struct Timer {  // the oracle's time, whichever way this case ends
       double& total;
+      double& per_kind;
       long long& q;
       const Oracle& o;
       Clock::time_point from;
       ~Timer() {
-        total += std::chrono::duration<double>(Clock::now() - from).count();
+        const double sec = std::chrono::duration<double>(Clock::now() - from).count();
+        total += sec;
+        per_kind += sec;
         q += o.queries;
       }
-    } timer{oracle_s, queries, setup.oracle, t2};
+    } timer{oracle_s, oracle_by_kind[kind], queries, setup.oracle, t2};
     if (!setup.ok) {
       ++kc.unverifiable;
       ADD_FAILURE() << "the oracle cannot read a case the validator answered " << to_string(a.verdict) << ": "
@@ -1867,7 +2002,7 @@ TEST(P4SweptOracle, ValidatorNeverClearsWhatTheOcctSweepReaches) {
         for (std::size_t ob = 0; ob < o.obstacles.size(); ++ob) {
           if (!Oracle::applicable(o.bodies[b], o.obstacles[ob])) continue;
           const Rule r = Oracle::rule(o.bodies[b], o.obstacles[ob]);
-          const Measure m = o.distance(b, ob, r, c + 0.5);
+          const Measure m = o.distance(b, ob, r, c + 0.1 + 1e-9);
           if (m.failed) {
             failed = true;
             failure = m.why;
@@ -1886,7 +2021,19 @@ TEST(P4SweptOracle, ValidatorNeverClearsWhatTheOcctSweepReaches) {
       }
       ++kc.clear;
       ++kc.scenarios_clear[cs.scenario];
-      if (min_d < c + 0.1) ++kc.near_clear;
+      if (min_d < c + 0.1) {
+        ++kc.near_clear;
+        // [soft] The validator's bracket of its smallest clearance against the oracle's (the two may
+        // differ in how much of an intended contact they measure, hence soft).
+        // 1e-3: the oracle clips 0.011 mm beyond a contact face, the validator 0.01 mm.
+        if (min_d < a.min_clearance_lower_mm - 1e-3 || min_d > a.min_clearance_mm + 1e-3) {
+          ++bracket_mismatch;
+          if (bracket_mismatch <= 10)
+            std::cout << "[soft] oracle min clearance " << std::setprecision(9) << min_d << " (" << worst.body << " / "
+                      << worst.organ << ") outside the validator's bracket\n"
+                      << describe(cs) << describe_answer(a) << "\n";
+        }
+      }
       if (min_d < c - kRounding) {
         ++false_clears;
         ADD_FAILURE() << "FALSE CLEAR (case " << i << "): the oracle measures " << std::setprecision(12) << min_d
@@ -1920,7 +2067,7 @@ TEST(P4SweptOracle, ValidatorNeverClearsWhatTheOcctSweepReaches) {
         ADD_FAILURE() << "COLLISION names a pair the step does not check\n" << describe(cs) << describe_answer(a);
         continue;
       }
-      const Measure full = o.distance(bi, oi, kFull, c + 1.0);
+      const Measure full = o.distance(bi, oi, kFull, c + 0.1);
       if (full.failed) {
         ++oracle_failures;
         ++kc.unverifiable;
@@ -1937,7 +2084,7 @@ TEST(P4SweptOracle, ValidatorNeverClearsWhatTheOcctSweepReaches) {
       const Rule r = Oracle::rule(o.bodies[bi], o.obstacles[oi]);
       double named = full.distance;
       if (r != kFull) {
-        const Measure beyond = o.distance(bi, oi, r, c + 1.0);
+        const Measure beyond = o.distance(bi, oi, r, c + 0.1);
         if (!beyond.failed) {
           named = beyond.distance;
           if (beyond.distance > c + kConfirm) {
@@ -1980,15 +2127,18 @@ TEST(P4SweptOracle, ValidatorNeverClearsWhatTheOcctSweepReaches) {
   std::cout << "false CLEARs " << false_clears << ", unconfirmed collisions " << unconfirmed << ", unknown names "
             << unknown_names << ", oracle failures " << oracle_failures
             << ", [soft] collisions on intended contact cleared by the clipped rule " << collision_on_contact_not_beyond
+            << ", [soft] near CLEARs outside the reported clearance bracket " << bracket_mismatch
             << "\ntime: generation " << generate_s << " s, validator " << validator_s << " s, oracle " << oracle_s
             << " s, " << queries << " OCCT distance queries\n"
             << "oracle profile: pieces " << g_profile.pieces << " in " << g_profile.pieces_s << " s, clips "
             << g_profile.clips << " in " << g_profile.clip_s << " s, distances " << g_profile.distance_s << " s\n";
   for (const auto& [sc, sec] : gen_by_scenario) std::cout << "    generating " << sc << ": " << sec << " s\n";
+  for (const auto& [k, sec] : oracle_by_kind) std::cout << "    oracle " << to_string(k) << ": " << sec << " s\n";
   RecordProperty("false_clears", false_clears);
   RecordProperty("unconfirmed_collisions", unconfirmed);
   RecordProperty("oracle_failures", oracle_failures);
   RecordProperty("soft_contact_collisions", collision_on_contact_not_beyond);
+  RecordProperty("soft_bracket_mismatches", bracket_mismatch);
 
   EXPECT_EQ(false_clears, 0);
   EXPECT_EQ(unconfirmed, 0);
@@ -2004,3 +2154,4 @@ TEST(P4SweptOracle, ValidatorNeverClearsWhatTheOcctSweepReaches) {
 
 }  // namespace
 }  // namespace gk::p4
+
