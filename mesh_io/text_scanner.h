@@ -35,12 +35,14 @@ class TextScanner {
   std::size_t line_number_ = 0;
 };
 
+inline bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
+
 // The next blank-separated word of `line`, consumed; empty when there is none.
 inline std::string_view next_word(std::string_view& line) {
   std::size_t start = 0;
-  while (start < line.size() && (line[start] == ' ' || line[start] == '\t')) ++start;
+  while (start < line.size() && is_blank(line[start])) ++start;
   std::size_t end = start;
-  while (end < line.size() && line[end] != ' ' && line[end] != '\t') ++end;
+  while (end < line.size() && !is_blank(line[end])) ++end;
   const std::string_view word = line.substr(start, end - start);
   line.remove_prefix(end);
   return word;

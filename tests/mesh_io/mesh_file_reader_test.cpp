@@ -274,6 +274,7 @@ INSTANTIATE_TEST_SUITE_P(Manifest, SharedMeshTest,
                          ::testing::Values(SharedMesh{"meshes/fcl/env.obj", 2180}, SharedMesh{"meshes/fcl/rob.obj", 216},
                                            SharedMesh{"meshes/occt/TR12J_OCC64K.stl", 67498},
                                            SharedMesh{"meshes/occt/video_part.stl", 9694},
+                                           SharedMesh{"meshes/occt/motor.stl", 13506},  // ASCII STL, "solid" alone on its line
                                            SharedMesh{"meshes/cgal/turbine.off", 18460}),
                          [](const ::testing::TestParamInfo<SharedMesh>& param_info) {
                            std::string name = fs::path(param_info.param.path).stem().string();
