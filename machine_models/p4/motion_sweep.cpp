@@ -449,13 +449,21 @@ Result<ClearanceBracket> clearance_bracket(const MovingBody& body, const Motion&
   };
   // d(s) to the nearest organ, capped at the window: a query that finds nothing within it proves
   // d > window. Each organ's query is bounded by the nearest found so far (most end at the root).
+  std::vector<Aabb> organ_boxes;
+  for (const SweepOrgan& o : organs) organ_boxes.push_back(transformed_box(o.mesh->root_bounds(), o.pose));
+  std::vector<std::pair<double, std::size_t>> order(organs.size());
   auto measure = [&](double s, Sample& x) -> Result<bool> {
     const RigidTransform pose = motion.at(s);
     x.s = s;
     x.d = std::min(window_mm, out.upper_mm);
     x.dir = Vec3::Zero();
     ++out.queries;
-    for (std::size_t i = 0; i < organs.size(); ++i) {
+    // Nearest boxes first, and none whose box is already farther than the nearest found.
+    const Aabb body_box = transformed_box(body.mesh->root_bounds(), pose);
+    for (std::size_t i = 0; i < organs.size(); ++i) order[i] = {body_box.distance(organ_boxes[i]), i};
+    std::sort(order.begin(), order.end());
+    for (const auto& [box_gap, i] : order) {
+      if (box_gap >= x.d) break;
       DistanceRequest req;
       req.upper_bound_mm = x.d;
       auto r = distance(*body.mesh, pose, *organs[i].mesh, organs[i].pose, req);

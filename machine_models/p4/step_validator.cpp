@@ -320,7 +320,7 @@ Result<std::shared_ptr<const StepValidator::Prepared>> StepValidator::prepare(co
                                            " mm, the sheet's upper face at " + std::to_string(t) + " mm)");
 
   auto keep = [&]() {
-    if (prepared_.size() >= options_.memo_capacity) prepared_.clear();
+    if (prepared_.size() >= options_.prepared_capacity) prepared_.clear();
     prepared_[key] = prepared;
     return std::shared_ptr<const Prepared>(prepared);
   };

@@ -101,7 +101,8 @@ struct ValidatorOptions {
   int clearance_query_budget = 96;         // distance queries spent narrowing a CLEAR step's clearance
   int correction_search_budget = 16;       // steps validated (memo hits free) while searching a correction
   bool compute_corrections = true;
-  std::size_t memo_capacity = 100000;
+  std::size_t memo_capacity = 100000;     // answers kept (small)
+  std::size_t prepared_capacity = 2000;   // prepared bodies kept (meshes and BVHs: kilobytes each)
 };
 
 // Not thread-safe: give each thread its own validator (they may share nothing but the model).
