@@ -26,6 +26,10 @@ inline constexpr double kZeroAreaMm2 = 0.0;
 // Largest coordinate magnitude accepted in a mesh or pose (1 km beyond the biggest factory). [mm]
 inline constexpr double kMaxCoordinateMm = 1.0e7;
 
+// Largest length in a panel-bender request or machine model: a part's sizes, a flange or tab, a
+// bend point, a travel or retract (100 m, far beyond any machine; larger is malformed). [mm]
+inline constexpr double kMaxMachineLengthMm = 1.0e5;
+
 // ---- machine steps (the P4 panel bender's ValidateStep) ----
 
 // The default required clearance of a step: a moving or held body closer than this to an organ is

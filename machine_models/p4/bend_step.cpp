@@ -31,10 +31,10 @@ Result<bool> validate_step(const MachineModel& model, const BendStep& step) {
   // Malformed or absurd values are errors naming the field; values the machine cannot reach but
   // that make sense (an angle past the machine's range, a travel past its end) are machine limits,
   // denied by the validator.
-  constexpr double kMax = tolerances::kMaxCoordinateMm;
+  constexpr double kMax = tolerances::kMaxMachineLengthMm;
   auto sane = [&](double v) { return std::isfinite(v) && std::fabs(v) <= kMax; };
   if (!sane(step.bend_point_mm.x()) || !sane(step.bend_point_mm.y()))
-    return invalid_argument("bend_point", "must be finite and within 1e7 mm");
+    return invalid_argument("bend_point", "must be finite and within 1e5 mm");
   if (!sane(step.bend_direction.x()) || !sane(step.bend_direction.y()) || !(step.bend_direction.norm() > 1e-9))
     return invalid_argument("bend_direction", "must be a finite, non-zero direction");
   if (!std::isfinite(step.lateral_shift_mm) || std::fabs(step.lateral_shift_mm) > model.max_bend_length_mm)
@@ -43,7 +43,7 @@ Result<bool> validate_step(const MachineModel& model, const BendStep& step) {
     if (!std::isfinite(step.target_angle_deg) || !(step.target_angle_deg > 0.0) || step.target_angle_deg >= 180.0)
       return invalid_argument("target_angle_deg", "must be a magnitude in (0, 180) degrees");
   }
-  if (!sane(step.retract_mm) || step.retract_mm < 0.0) return invalid_argument("retract_mm", "must be >= 0 and at most 1e7 mm");
+  if (!sane(step.retract_mm) || step.retract_mm < 0.0) return invalid_argument("retract_mm", "must be >= 0 and at most 1e5 mm");
   if (!std::isfinite(step.turned_deg) || std::fabs(step.turned_deg) > 360.0)
     return invalid_argument("turned_deg", "must be within [-360, 360] degrees");
   if (step.kind == StepKind::kRotate) {
@@ -53,7 +53,7 @@ Result<bool> validate_step(const MachineModel& model, const BendStep& step) {
   if (step.kind == StepKind::kApproach || step.kind == StepKind::kRetract) {
     if (!sane(step.travel_mm.x()) || !sane(step.travel_mm.y()) || !sane(step.travel_mm.z()) ||
         !(step.travel_mm.norm() > 0.0))
-      return invalid_argument("travel", "must be a finite, non-zero travel within 1e7 mm");
+      return invalid_argument("travel", "must be a finite, non-zero travel within 1e5 mm");
     if (step.travel_mm.z() != 0.0)
       return invalid_argument("travel.z_mm", "must be 0: the manipulator moves the part in the table's plane");
   }

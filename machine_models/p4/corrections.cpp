@@ -181,7 +181,7 @@ void StepValidator::add_correction(const SheetPart& part, const BendStep& step, 
   // disengaged segments: the design's shift is (gap centre - feature centre); the clearing shift
   // nearest to it is returned with the interval of clearing shifts around it. The lateral move
   // (ABA open), the clamp and the step are validated at the new position.
-  const auto [fx0, fx1] = feature_x_range(part, step, hit.point_mm);
+  const auto [fx0, fx1] = feature_x_range(part, step, hit.point_at_start_mm);
   const double feature_centre = 0.5 * (fx0 + fx1), feature_width = fx1 - fx0;
   std::vector<std::pair<double, double>> gaps;
   for (std::size_t i = 0; i < model.aba.segment_widths_mm.size();) {
@@ -211,7 +211,7 @@ void StepValidator::add_correction(const SheetPart& part, const BendStep& step, 
       bool changed = false;
       for (const StepCollision& col : current.collisions) {
         if (!is_aba(col.organ) || (col.body != "part" && col.body != "flange")) continue;
-        const auto [x0, x1] = feature_x_range(part, step, col.point_mm);
+        const auto [x0, x1] = feature_x_range(part, step, col.point_at_start_mm);
         const double margin = options_.required_clearance_mm + 1.0;
         for (std::size_t i = 0; i < engaged.size(); ++i)
           if (engaged[i] && model.slot_x_max(i) > x0 - margin && model.slot_x_min(i) < x1 + margin) {

@@ -1,5 +1,7 @@
 #include "machine_models/p4/machine_model.h"
 
+#include "kernel/tolerances.h"
+
 #include <toml++/toml.h>
 
 #include <cmath>
@@ -12,7 +14,8 @@ namespace {
 Result<double> number(const toml::table& t, const std::string& key, const std::string& field) {
   const auto v = t[key].value<double>();
   if (!v) return invalid_argument(field, "missing or not a number");
-  if (!std::isfinite(*v)) return invalid_argument(field, "not finite");
+  if (!std::isfinite(*v) || std::fabs(*v) > tolerances::kMaxMachineLengthMm)
+    return invalid_argument(field, "must be finite and within 1e5 (mm or degrees)");
   return *v;
 }
 
@@ -34,7 +37,8 @@ Result<std::vector<Vec2>> convex_profile(const toml::node* node, const std::stri
     const std::string f = field + "[" + std::to_string(i) + "]";
     if (!p || p->size() != 2) return invalid_argument(f, "must be a [y, z] pair");
     const auto y = (*p)[0].value<double>(), z = (*p)[1].value<double>();
-    if (!y || !z || !std::isfinite(*y) || !std::isfinite(*z)) return invalid_argument(f, "must be two finite numbers");
+    if (!y || !z || !(std::fabs(*y) <= tolerances::kMaxMachineLengthMm) || !(std::fabs(*z) <= tolerances::kMaxMachineLengthMm))
+      return invalid_argument(f, "must be two finite numbers within 1e5 mm");
     pts.emplace_back(*y, *z);
   }
   double area2 = 0.0;
@@ -98,7 +102,7 @@ Result<MachineModel> parse_machine_model(const std::string& toml_text) {
   if (!widths || widths->empty()) return invalid_argument("aba.segment_widths_mm", "needs at least one segment");
   for (std::size_t i = 0; i < widths->size(); ++i) {
     const auto w = (*widths)[i].value<double>();
-    if (!w || !(*w > 0.0) || !std::isfinite(*w))
+    if (!w || !(*w > 0.0) || !(*w <= tolerances::kMaxMachineLengthMm))
       return invalid_argument("aba.segment_widths_mm[" + std::to_string(i) + "]", "must be a positive width");
     m.aba.segment_widths_mm.push_back(*w);
   }
@@ -124,7 +128,9 @@ Result<MachineModel> parse_machine_model(const std::string& toml_text) {
         return invalid_argument(f + ".x_mm", "must be [min, max]");
       spec.x_min_mm = *(*x)[0].value<double>();
       spec.x_max_mm = *(*x)[1].value<double>();
-      if (!(spec.x_max_mm > spec.x_min_mm)) return invalid_argument(f + ".x_mm", "max must exceed min");
+      if (!(spec.x_max_mm > spec.x_min_mm) || !(std::fabs(spec.x_min_mm) <= tolerances::kMaxMachineLengthMm) ||
+          !(std::fabs(spec.x_max_mm) <= tolerances::kMaxMachineLengthMm))
+        return invalid_argument(f + ".x_mm", "max must exceed min, both within 1e5 mm");
       auto profile = convex_profile((*o)["profile_yz_mm"].node(), f + ".profile_yz_mm");
       if (!profile.ok()) return profile.error();
       spec.profile_yz_mm = profile.value();
@@ -143,11 +149,12 @@ Result<MachineModel> parse_machine_model(const std::string& toml_text) {
     dst[0] = *(*r)[0].value<double>();
     dst[1] = *(*r)[1].value<double>();
   }
-  if (!(m.manipulator.travel_x_mm[1] >= m.manipulator.travel_x_mm[0]) || !std::isfinite(m.manipulator.travel_x_mm[0]) ||
-      !std::isfinite(m.manipulator.travel_x_mm[1]))
+  auto sane = [](double v) { return std::fabs(v) <= tolerances::kMaxMachineLengthMm; };
+  if (!(m.manipulator.travel_x_mm[1] >= m.manipulator.travel_x_mm[0]) || !sane(m.manipulator.travel_x_mm[0]) ||
+      !sane(m.manipulator.travel_x_mm[1]))
     return invalid_argument("manipulator.travel_x_mm", "must be finite with max >= min");
-  if (!(m.manipulator.travel_y_mm[1] >= m.manipulator.travel_y_mm[0]) || !std::isfinite(m.manipulator.travel_y_mm[0]) ||
-      !std::isfinite(m.manipulator.travel_y_mm[1]))
+  if (!(m.manipulator.travel_y_mm[1] >= m.manipulator.travel_y_mm[0]) || !sane(m.manipulator.travel_y_mm[0]) ||
+      !sane(m.manipulator.travel_y_mm[1]))
     return invalid_argument("manipulator.travel_y_mm", "must be finite with max >= min");
   GK_READ(m.manipulator.cup_half_width_mm, manip, "cup_half_width_mm", positive)
   GK_READ(m.manipulator.cup_height_mm, manip, "cup_height_mm", positive)
@@ -157,7 +164,8 @@ Result<MachineModel> parse_machine_model(const std::string& toml_text) {
   {
     const toml::array* half = (*manip)["frame_half_size_mm"].as_array();
     if (!half || half->size() != 2 || !(*half)[0].value<double>() || !(*half)[1].value<double>() ||
-        !(*(*half)[0].value<double>() > 0.0) || !(*(*half)[1].value<double>() > 0.0))
+        !(*(*half)[0].value<double>() > 0.0) || !(*(*half)[1].value<double>() > 0.0) ||
+        !sane(*(*half)[0].value<double>()) || !sane(*(*half)[1].value<double>()))
       return invalid_argument("manipulator.frame_half_size_mm", "must be [half_x, half_y], both positive");
     m.manipulator.frame_half_size_mm = Vec2(*(*half)[0].value<double>(), *(*half)[1].value<double>());
     const toml::array* cups = (*manip)["cup_offsets_mm"].as_array();

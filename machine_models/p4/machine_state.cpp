@@ -37,7 +37,8 @@ Result<bool> validate_state(const MachineModel& model, const MachineState& state
   if (!std::isfinite(state.manipulator_y_mm) || state.manipulator_y_mm < model.manipulator.travel_y_mm[0] ||
       state.manipulator_y_mm > model.manipulator.travel_y_mm[1])
     return invalid_argument("manipulator_y_mm", "outside the manipulator's travel");
-  if (!std::isfinite(state.manipulator_rotation_deg)) return invalid_argument("manipulator_rotation_deg", "not finite");
+  if (!std::isfinite(state.manipulator_rotation_deg) || std::fabs(state.manipulator_rotation_deg) > 360.0)
+    return invalid_argument("manipulator_rotation_deg", "must be within [-360, 360] degrees");
   if (!std::isfinite(state.lower_blade_z_offset_mm) || std::fabs(state.lower_blade_z_offset_mm) > 500.0)
     return invalid_argument("lower_blade_z_offset_mm", "must be within [-500, 500] mm");
   return true;

@@ -51,8 +51,11 @@ Plate Plate::transformed(const RigidTransform& t) const {
 Result<SheetPart> SheetPart::create(const SheetPartSpec& spec) {
   for (auto [value, field] : {std::pair{spec.width_mm, "width_mm"}, std::pair{spec.depth_mm, "depth_mm"},
                               std::pair{spec.thickness_mm, "thickness_mm"}})
-    if (!(value > 0.0) || !(value <= tolerances::kMaxCoordinateMm))
-      return invalid_argument(field, "must be a positive length of at most 1e7 mm");
+    if (!(value > 0.0) || !(value <= tolerances::kMaxMachineLengthMm))
+      return invalid_argument(field, "must be a positive length of at most 1e5 mm");
+  // A part of more features than any sheet has is malformed (and would hold a worker for long).
+  if (spec.flanges.size() > 100) return invalid_argument("flanges", "at most 100 flanges");
+  if (spec.tabs.size() > 1000) return invalid_argument("tabs", "at most 1000 tabs");
   SheetPart part;
   part.thickness_ = spec.thickness_mm;
   const double t = spec.thickness_mm;
@@ -60,10 +63,10 @@ Result<SheetPart> SheetPart::create(const SheetPartSpec& spec) {
   for (std::size_t i = 0; i < spec.flanges.size(); ++i) {
     const FlangeSpec& f = spec.flanges[i];
     const std::string field = "flanges[" + std::to_string(i) + "]";
-    if (!(f.height_mm > 0.0) || !(f.height_mm <= tolerances::kMaxCoordinateMm))
-      return invalid_argument(field + ".height_mm", "must be positive and at most 1e7 mm");
-    if (!std::isfinite(f.start_mm) || !std::isfinite(f.length_mm))
-      return invalid_argument(field + ".start_mm", "start_mm and length_mm must be finite");
+    if (!(f.height_mm > 0.0) || !(f.height_mm <= tolerances::kMaxMachineLengthMm))
+      return invalid_argument(field + ".height_mm", "must be positive and at most 1e5 mm");
+    if (!std::isfinite(f.start_mm) || !(f.length_mm >= 0.0) || !(f.length_mm <= tolerances::kMaxMachineLengthMm))
+      return invalid_argument(field + ".length_mm", "start_mm must be finite, length_mm in [0, 1e5] mm (0: the whole edge)");
     if (!std::isfinite(f.angle_deg) || f.angle_deg == 0.0 || std::fabs(f.angle_deg) >= 180.0)
       return invalid_argument(field + ".angle_deg", "must be non-zero and within (-180, 180) degrees");
     const bool along_x = f.side == Side::kYMin || f.side == Side::kYMax;
@@ -96,8 +99,8 @@ Result<SheetPart> SheetPart::create(const SheetPartSpec& spec) {
     if (!(tab.x_max_mm > tab.x_min_mm) || tab.x_min_mm < 0.0 || tab.x_max_mm > spec.width_mm)
       return invalid_argument(field + ".x_mm", "must be an interval inside the blank's width");
     if (!(tab.y_mm >= 0.0) || tab.y_mm + t > spec.depth_mm) return invalid_argument(field + ".y_mm", "must lie on the blank");
-    if (!(tab.height_mm > 0.0) || !(tab.height_mm <= tolerances::kMaxCoordinateMm))
-      return invalid_argument(field + ".height_mm", "must be positive and at most 1e7 mm");
+    if (!(tab.height_mm > 0.0) || !(tab.height_mm <= tolerances::kMaxMachineLengthMm))
+      return invalid_argument(field + ".height_mm", "must be positive and at most 1e5 mm");
     part.plates_.push_back({Vec3(tab.x_min_mm, tab.y_mm, t),
                             {Vec3(tab.x_max_mm - tab.x_min_mm, 0, 0), Vec3(0, t, 0), Vec3(0, 0, tab.height_mm)},
                             "tab." + std::to_string(i)});
@@ -115,8 +118,8 @@ SheetPart SheetPart::from_plates(std::vector<Plate> plates, double thickness_mm)
 }
 
 Result<SheetPart> SheetPart::from_surface(TriangleMesh surface, double thickness_mm, double deflection_mm) {
-  if (!(thickness_mm > 0.0) || !(thickness_mm <= tolerances::kMaxCoordinateMm))
-    return invalid_argument("thickness_mm", "must be a positive length of at most 1e7 mm");
+  if (!(thickness_mm > 0.0) || !(thickness_mm <= tolerances::kMaxMachineLengthMm))
+    return invalid_argument("thickness_mm", "must be a positive length of at most 1e5 mm");
   if (!(deflection_mm >= 0.0) || !(deflection_mm <= 1000.0)) return invalid_argument("deflection_mm", "must be in [0, 1000] mm");
   SheetPart part;
   part.thickness_ = thickness_mm;
@@ -172,7 +175,7 @@ Result<bool> SheetPart::split_surface(const Vec2& point, const Vec2& direction, 
   for (std::size_t t = 0; t < surface_->triangle_count(); ++t) {
     const Triangle tri = surface_->triangle(t);
     add(clip_polygon({tri[0], tri[1], tri[2]}, n, q, offset_mm), moving_vertices, moving_faces);
-    add(clip_polygon({tri[0], tri[1], tri[2]}, -n, q, 0.0), fixed_vertices, fixed_faces);
+    add(clip_polygon({tri[0], tri[1], tri[2]}, -n, q, -offset_mm), fixed_vertices, fixed_faces);
   }
   return true;
 }
@@ -238,7 +241,7 @@ Result<bool> SheetPart::split(const Vec2& point, const Vec2& direction, double o
       moving.push_back(p);
       continue;
     }
-    if (hi <= 1e-9) {
+    if (hi <= offset_mm + 1e-9) {  // on the held side, or in the bend zone (held, checked where it stands)
       fixed.push_back(p);
       continue;
     }
@@ -258,7 +261,7 @@ Result<bool> SheetPart::split(const Vec2& point, const Vec2& direction, double o
       out.edge[k] = (a1 - a0) * p.edge[k];
       return std::pair<Plate, bool>(out, a1 - a0 > 1e-12);
     };
-    if (auto [part, ok] = piece(lo - 1.0, 0.0); ok) fixed.push_back(part);
+    if (auto [part, ok] = piece(lo - 1.0, offset_mm); ok) fixed.push_back(part);
     if (auto [part, ok] = piece(offset_mm, hi + 1.0); ok) moving.push_back(part);
   }
   return true;

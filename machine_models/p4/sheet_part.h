@@ -73,13 +73,15 @@ class SheetPart {
 
   // Splits the part by the vertical plane through the bend line (point, direction in XY; the
   // moving side lies to the left of the direction). Plates on the moving side beyond offset_mm go
-  // to `moving`, plates on the other side to `fixed`; material in between is dropped (the bend zone).
+  // to `moving`, the rest to `fixed`: the bend zone in between stays with the held side (it is
+  // formed, not swung, and whatever stands in it is checked where it stands).
   // A plate the plane crosses obliquely is an error naming it.
   Result<bool> split(const Vec2& point, const Vec2& direction, double offset_mm, std::vector<Plate>& moving,
                      std::vector<Plate>& fixed) const;
 
-  // The same split for a part given by its surface: triangles are clipped at the plane(s); each
-  // side comes back as a triangle soup (empty when nothing lies there).
+  // The same split for a part given by its surface: triangles are clipped at the planes (the bend
+  // zone stays with the held side); each side comes back as a triangle soup (empty when nothing
+  // lies there).
   Result<bool> split_surface(const Vec2& point, const Vec2& direction, double offset_mm, std::vector<Vec3>& moving_vertices,
                              std::vector<TriangleMesh::Face>& moving_faces, std::vector<Vec3>& fixed_vertices,
                              std::vector<TriangleMesh::Face>& fixed_faces) const;

@@ -144,6 +144,9 @@ struct StepBody {
   // support top height) and what stands above the pressing plane. Empty: nothing there.
   std::vector<std::pair<double, std::optional<MovingBody>>> below_support;
   std::optional<MovingBody> above_pressing;
+  // The part: what stands above its sheet's upper face (tabs, flanges), which the manipulator
+  // standing on that face must keep clear of.
+  std::optional<MovingBody> above_sheet;
 };
 
 // Something a body must keep clear of, placed for the step: an organ, or (in a bend) a plate of
@@ -361,6 +364,15 @@ Result<std::shared_ptr<const StepValidator::Prepared>> StepValidator::prepare(co
         b.above_pressing = std::move(body).value();
       }
     }
+    if (b.name == "part") {
+      auto above = clip_mesh_at_z(mesh, t + tolerances::kIntendedContactMm, false);
+      if (!above.ok()) return above.error();
+      if (above.value()) {
+        auto body = make_body(std::move(*above.value()), plates);
+        if (!body.ok()) return body.error();
+        b.above_sheet = std::move(body).value();
+      }
+    }
     auto whole = make_body(std::move(mesh), plates);
     if (!whole.ok()) return whole.error();
     b.whole = std::move(whole).value();
@@ -436,13 +448,92 @@ double depth_at(const MovingBody& body, const RigidTransform& pose, const Convex
       depth = std::max(depth, penetration_depth(ConvexPolytope::plate(p.transformed(pose)), obstacle));
     return depth;
   }
-  ConvexPolytope point;
-  point.vertices.resize(1);
-  for (const Vec3& v : body.points) {
-    point.vertices[0] = pose.apply(v);
-    depth = std::max(depth, penetration_depth(point, obstacle));
+  // A surface: each triangle is convex, and separating the body separates each of them, so the
+  // deepest triangle is a lower bound of the body's depth.
+  Aabb obstacle_box;
+  for (const Vec3& v : obstacle.vertices) obstacle_box.extend(v);
+  const TriangleMesh& mesh = body.mesh->mesh();
+  ConvexPolytope tri;
+  tri.vertices.resize(3);
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const Triangle corners = mesh.triangle(t);
+    Aabb box;
+    for (int k = 0; k < 3; ++k) box.extend(tri.vertices[k] = pose.apply(corners[k]));
+    if (!box.overlaps(obstacle_box)) continue;
+    const Vec3 n = (tri.vertices[1] - tri.vertices[0]).cross(tri.vertices[2] - tri.vertices[0]);
+    if (!(n.norm() > 0.0)) continue;
+    tri.face_normals = {n.normalized()};
+    tri.edge_directions.clear();
+    for (int k = 0; k < 3; ++k) tri.edge_directions.push_back((tri.vertices[(k + 1) % 3] - tri.vertices[k]).normalized());
+    depth = std::max(depth, penetration_depth(tri, obstacle));
   }
   return depth;
+}
+
+// The body's plate `index` alone, as a body (for the figures of one manipulator part).
+MovingBody plate_of(const MovingBody& body, std::size_t index) {
+  MovingBody one;
+  one.mesh = body.mesh;
+  one.plates = {body.plates[index]};
+  for (const Vec3& c : body.plates[index].corners()) one.points.push_back(c);
+  return one;
+}
+
+// The plate of a body that names a collision: the deepest into the obstacle when it penetrates,
+// else the nearest to the witness point (machine coordinates at the body's start).
+std::size_t naming_plate(const MovingBody& body, const RigidTransform& pose, const ConvexPolytope& obstacle, const Vec3& witness) {
+  std::size_t best = 0;
+  double deepest = 0.0, nearest = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < body.plates.size(); ++i) {
+    const double d = penetration_depth(ConvexPolytope::plate(body.plates[i].transformed(pose)), obstacle);
+    if (d > deepest) {
+      deepest = d;
+      best = i;
+    }
+  }
+  if (deepest > 0.0) return best;
+  ConvexPolytope point;
+  point.vertices = {witness};
+  for (std::size_t i = 0; i < body.plates.size(); ++i) {
+    const double d = separation_lower_bound(point, ConvexPolytope::plate(body.plates[i]));
+    if (d < nearest) {
+      nearest = d;
+      best = i;
+    }
+  }
+  return best;
+}
+
+// Where a body that starts inside an obstacle is: the mean of the body's corners inside it, or of
+// the obstacle's corners inside the body's plates, or the deepest plate's centre.
+Vec3 inside_point(const MovingBody& body, const ConvexPolytope& obstacle) {
+  Vec3 sum = Vec3::Zero();
+  int n = 0;
+  ConvexPolytope point;
+  point.vertices.resize(1);
+  for (const Plate& p : body.plates)
+    for (const Vec3& c : p.corners()) {
+      point.vertices[0] = c;
+      if (penetration_depth(point, obstacle) > 0.0) {
+        sum += c;
+        ++n;
+      }
+    }
+  for (const Vec3& c : obstacle.vertices)
+    for (const Plate& p : body.plates) {
+      point.vertices[0] = c;
+      if (penetration_depth(point, ConvexPolytope::plate(p)) > 0.0) {
+        sum += c;
+        ++n;
+        break;
+      }
+    }
+  if (n > 0) return sum / n;
+  if (!body.plates.empty()) {
+    const Plate& p = body.plates[naming_plate(body, RigidTransform{}, obstacle, Vec3::Zero())];
+    return p.origin + 0.5 * (p.edge[0] + p.edge[1] + p.edge[2]);
+  }
+  return body.points.front();
 }
 
 // The deepest penetration over s in [s0, 1]: a grid of samples, then a golden-section search
@@ -505,21 +596,6 @@ bool starts_inside(const StepBody& body, const MovingBody& version, const Obstac
   return depth > (intended ? tolerances::kIntendedContactMm : 0.0);
 }
 
-std::string plate_label_near(const std::vector<Plate>& plates, const Vec3& point, const std::string& fallback) {
-  double best = std::numeric_limits<double>::infinity();
-  std::string label = fallback;
-  for (const Plate& p : plates) {
-    ConvexPolytope q;
-    q.vertices = {point};
-    const double d = separation_lower_bound(q, ConvexPolytope::plate(p));
-    if (d < best) {
-      best = d;
-      label = p.label;
-    }
-  }
-  return label;
-}
-
 }  // namespace
 
 Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const BendStep& step) {
@@ -547,8 +623,9 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
   const bool bend = is_bend(step.kind);
   const bool clamped = bend || step.kind == StepKind::kClamp;
 
-  // The organs as obstacles for this step: raised with the blankholder while the part moves
-  // beneath it; the blade that forms a BEND_UP is the lower blade, so it is not parked there.
+  // The organs as obstacles for this step, raised with the blankholder while the part moves
+  // beneath it. The lower blade is an obstacle where the state parks it in every step, a BEND_UP
+  // included (the blade starts from there; its forming path to the flange is not modelled).
   auto lifted = [&](const Organ& o) { return o.relative_to_clamp && prep.lift_mm != 0.0; };
   auto box_of = [&](int i) {
     const Organ& o = organs[i];
@@ -571,7 +648,6 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
     ob.pressing = clamped && o.is_aba_segment && o.engaged;
     return ob;
   };
-  auto takes_part = [&](const Organ& o) { return !(step.kind == StepKind::kBendUp && o.name == "blade.lower"); };
 
   // Clearance bookkeeping for a CLEAR answer: every pair's proven lower bound and measured value.
   double lower_bound = std::numeric_limits<double>::infinity();
@@ -583,13 +659,67 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
     }
   };
 
-  // 1. Bodies held still: the held side of the part and the manipulator in CLAMP and bends.
+  // 1. Bodies held still: the held side of the part and the manipulator in CLAMP and bends; and,
+  // in every step, the manipulator against the part it holds (they move together): its cups stand
+  // on the sheet's upper face, and nothing of it may come near what stands above that face.
   t = Clock::now();
+  {
+    const StepBody* part_body = nullptr;
+    const StepBody* manipulator = nullptr;
+    for (const StepBody& b : prep.bodies) {
+      if (b.name == "part") part_body = &b;
+      if (b.name == "manipulator") manipulator = &b;
+    }
+    if (part_body && manipulator && part_body->above_sheet &&
+        manipulator->whole.mesh->root_bounds().expanded(window).overlaps(part_body->above_sheet->mesh->root_bounds())) {
+      DistanceRequest req;
+      req.upper_bound_mm = window;
+      auto d = distance(*manipulator->whole.mesh, RigidTransform{}, *part_body->above_sheet->mesh, RigidTransform{}, req);
+      if (!d.ok()) return d.error();
+      double depth = 0.0;
+      std::size_t deepest_cup = 0, deepest_feature = 0;
+      for (std::size_t i = 0; i < manipulator->whole.plates.size(); ++i)
+        for (std::size_t j = 0; j < part_body->whole.plates.size(); ++j) {
+          const double dij = penetration_depth(ConvexPolytope::plate(manipulator->whole.plates[i]),
+                                               ConvexPolytope::plate(part_body->whole.plates[j]));
+          if (dij > depth) {
+            depth = dij;
+            deepest_cup = i;
+            deepest_feature = j;
+          }
+        }
+      if (depth > tolerances::kIntendedContactMm || (d.value().found && d.value().distance_mm <= contact)) {
+        StepCollision col;
+        const Vec3 witness = d.value().found ? d.value().point_b : inside_point(part_body->whole, ConvexPolytope::plate(manipulator->whole.plates[deepest_cup]));
+        const ConvexPolytope witness_point{{witness}, {}, {}};
+        if (!(depth > tolerances::kIntendedContactMm)) {
+          double nearest = std::numeric_limits<double>::infinity();
+          for (std::size_t j = 0; j < part_body->whole.plates.size(); ++j) {
+            const double dj = separation_lower_bound(witness_point, ConvexPolytope::plate(part_body->whole.plates[j]));
+            if (dj < nearest) {
+              nearest = dj;
+              deepest_feature = j;
+            }
+          }
+          deepest_cup = naming_plate(manipulator->whole, RigidTransform{}, ConvexPolytope::plate(part_body->whole.plates[deepest_feature]),
+                                     d.value().point_a);
+        }
+        col.organ = part_body->whole.plates.empty() ? "part" : "part." + part_body->whole.plates[deepest_feature].label;
+        col.body = manipulator->whole.plates[deepest_cup].label;
+        col.point_mm = col.point_at_start_mm = d.value().found ? d.value().point_a : witness;
+        col.organ_point_mm = witness;
+        col.depth_mm = std::max(0.0, depth);
+        answer.collisions.push_back(col);
+      } else if (d.value().found) {
+        measured(d.value().distance_mm, "part", d.value().point_a);
+        lower_bound = std::min(lower_bound, d.value().distance_mm);
+      }
+    }
+  }
   for (const StepBody& body : prep.bodies) {
     if (body.moves) continue;
     const Aabb reach = body.whole.mesh->root_bounds().expanded(window);
     for (int i : scene_->organs_overlapping(reach)) {
-      if (!takes_part(organs[i])) continue;
       const Obstacle ob = obstacle_of(i);
       const MovingBody* version = version_for(body, ob);
       if (!version) continue;
@@ -602,10 +732,16 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
       if (inside || (d.value().found && d.value().distance_mm <= contact)) {
         StepCollision col;
         col.organ = ob.name;
-        col.body = body.name == "manipulator" ? plate_label_near(body.whole.plates, d.value().point_a, body.name) : body.name;
-        col.point_mm = d.value().found ? d.value().point_a : version->points.front();
+        col.body = body.name;
+        col.point_mm = d.value().found ? d.value().point_a : inside_point(*version, ob.shape);
         col.organ_point_mm = d.value().found ? d.value().point_b : col.point_mm;
         col.depth_mm = depth;
+        if (body.name == "manipulator") {  // one of its parts: named with its own depth
+          const std::size_t k = naming_plate(body.whole, RigidTransform{}, ob.shape, col.point_mm);
+          col.body = body.whole.plates[k].label;
+          col.depth_mm = depth_at(plate_of(body.whole, k), RigidTransform{}, ob.shape);
+        }
+        col.point_at_start_mm = col.point_mm;
         answer.collisions.push_back(col);
         continue;
       }
@@ -619,8 +755,11 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
   if (!answer.collisions.empty()) {
     answer.verdict = Verdict::kCollision;
     answer.decided_by = Stage::kStatic;
-    answer.reason = answer.collisions.front().body + " stands in " + answer.collisions.front().organ +
-                    (step.kind == StepKind::kClamp ? " where the blankholder closes" : " while the part is clamped");
+    const StepCollision& first = answer.collisions.front();
+    answer.reason = first.body + " stands in " + first.organ +
+                    (first.organ.rfind("part", 0) == 0 ? ", which the manipulator holds"
+                     : step.kind == StepKind::kClamp   ? " where the blankholder closes"
+                                                       : " while the part is clamped");
     return answer;
   }
 
@@ -633,7 +772,7 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
   // Organs nobody examines further are at least their box distance away from every body.
   auto bound_unexamined = [&](const std::vector<char>& examined) {
     for (std::size_t i = 0; i < organs.size(); ++i) {
-      if (examined[i] || !takes_part(organs[i])) continue;
+      if (examined[i]) continue;
       const Aabb organ_box = box_of(static_cast<int>(i));
       for (const StepBody& b : prep.bodies) {
         const Aabb box = b.moves ? swept : b.whole.mesh->root_bounds();
@@ -662,7 +801,7 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
   const Aabb query = swept.expanded(required);
   Aabb machine;
   for (std::size_t i = 0; i < organs.size(); ++i)
-    if (takes_part(organs[i])) machine.extend(box_of(static_cast<int>(i)));
+    machine.extend(box_of(static_cast<int>(i)));
   for (const Plate& p : prep.manipulator_plates)
     for (const Vec3& c : p.corners()) machine.extend(c);
   answer.times.global_box_us = us_since(t);
@@ -677,7 +816,7 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
   tree_query.min.z() -= prep.lift_mm;
   std::vector<Obstacle> obstacles;
   for (int i : scene_->organs_overlapping(tree_query)) {
-    if (!takes_part(organs[i]) || !box_of(i).overlaps(query)) continue;
+    if (!box_of(i).overlaps(query)) continue;
     examined[i] = 1;
     obstacles.push_back(obstacle_of(i));
   }
@@ -731,14 +870,22 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
                          const std::string& why) {
     StepCollision col;
     col.organ = p.obstacle->name;
-    col.body = p.body->name == "manipulator" ? plate_label_near(p.body->whole.plates, prep.motion.at(s).inverse().apply(on_body), p.body->name)
-                                             : p.body->name;
+    col.body = p.body->name;
     col.point_mm = on_body;
+    col.point_at_start_mm = prep.motion.at(s).inverse().apply(on_body);
     col.organ_point_mm = on_organ;
     col.normal = normal;
     col.first_contact_fraction = s;
     col.first_contact_deg = prep.motion.rotation ? std::fabs(prep.motion.angle_rad) * 180.0 / kPi * s : 0.0;
-    col.depth_mm = deepest_over_motion(p.body->whole, prep.motion, s, p.obstacle->shape);
+    const MovingBody* deepest = &p.body->whole;
+    MovingBody part_of_manipulator;
+    if (p.body->name == "manipulator") {  // one of its parts: named, and measured, alone
+      const std::size_t k = naming_plate(p.body->whole, prep.motion.at(s), p.obstacle->shape, col.point_at_start_mm);
+      col.body = p.body->whole.plates[k].label;
+      part_of_manipulator = plate_of(p.body->whole, k);
+      deepest = &part_of_manipulator;
+    }
+    col.depth_mm = deepest_over_motion(*deepest, prep.motion, s, p.obstacle->shape);
     answer.collisions.push_back(col);
     answer.verdict = Verdict::kCollision;
     answer.decided_by = Stage::kNarrow;
@@ -748,9 +895,10 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
   // A body that starts inside an obstacle has no surface pair to find.
   for (const Pair& p : pairs) {
     double depth = 0.0;
-    if (starts_inside(*p.body, *p.version, *p.obstacle, depth))
-      return collide_now(p, 0.0, p.version->points.front(), p.version->points.front(), Vec3::Zero(),
-                         p.body->name + " starts inside " + p.obstacle->name);
+    if (starts_inside(*p.body, *p.version, *p.obstacle, depth)) {
+      const Vec3 where = inside_point(p.body->whole, p.obstacle->shape);
+      return collide_now(p, 0.0, where, where, Vec3::Zero(), p.body->name + " starts inside " + p.obstacle->name);
+    }
   }
   if (pairs.empty()) return finish_clear(Stage::kBroadPhase, "no organ's box meets the motion's box");
 

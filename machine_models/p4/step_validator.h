@@ -61,6 +61,7 @@ struct StepCollision {
   std::string organ;                    // e.g. "aba.segment.12", "bed", "tower.left", "manipulator.rotator"
   std::string body;                     // what of the step hit it: "part", "flange", "manipulator.cup.0", ...
   Vec3 point_mm = Vec3::Zero();         // on the body, machine coordinates, at first contact
+  Vec3 point_at_start_mm = Vec3::Zero();  // the same body point where it was when the step began
   Vec3 organ_point_mm = Vec3::Zero();   // on the organ
   Vec3 normal = Vec3::Zero();           // impact normal, from the organ towards the body
   double depth_mm = 0.0;                // deepest penetration found over the motion (0: within the clearance only)

@@ -81,7 +81,7 @@ Case random_case(std::mt19937_64& rng, const MachineModel& model) {
   const double line = spec.depth_mm - flange;
   for (Side side : {Side::kXMin, Side::kXMax})
     if (u(rng) < 0.4)
-      spec.flanges.push_back({side, 10.0 + 120.0 * u(rng), (u(rng) < 0.8 ? 1.0 : -1.0) * (30.0 + 100.0 * u(rng)), 0.0, line - 10.0});
+      spec.flanges.push_back({side, 10.0 + 120.0 * u(rng), (u(rng) < 0.8 ? 1.0 : -1.0) * (30.0 + 100.0 * u(rng)), 0.0, std::max(1.0, line - 10.0)});
   if (u(rng) < 0.3) {
     const double x0 = spec.width_mm * u(rng) * 0.9;
     spec.tabs.push_back({x0, x0 + 10.0 + 60.0 * u(rng), std::max(0.0, line - 10.0 - 200.0 * u(rng)), 5.0 + 150.0 * u(rng)});

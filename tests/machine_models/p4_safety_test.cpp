@@ -40,7 +40,7 @@ RandomBend random_bend(testing::Rng& rng, const MachineModel& model) {
   for (Side side : {Side::kXMin, Side::kXMax})
     if (u(rng) < 0.5)
       spec.flanges.push_back({side, 10.0 + 150.0 * u(rng), (u(rng) < 0.7 ? 1.0 : -1.0) * (30.0 + 100.0 * u(rng)), 0.0,
-                              line - 10.0});
+                              std::max(1.0, line - 10.0)});
   if (u(rng) < 0.5) spec.flanges.push_back({Side::kYMax, 10.0 + 100.0 * u(rng), (u(rng) < 0.5 ? 1.0 : -1.0) * 90.0, 0.0, 0.0});
   r.part = SheetPart::create(spec).value();
   r.step.kind = u(rng) < 0.6 ? StepKind::kBendUp : StepKind::kBendDown;
@@ -80,13 +80,11 @@ bool bend_body(const MachineModel& model, const RandomBend& r, MovingBody& body,
   return true;
 }
 
-// Every organ the flange of a bend meets: all of them, supports included, but the lower blade
-// in a BEND_UP (it forms the bend).
-std::vector<SweepOrgan> sweep_organs(const MachineScene& scene, StepKind kind = StepKind::kBendDown) {
+// Every organ the flange of a bend meets: all of them, supports and the parked blade included.
+std::vector<SweepOrgan> sweep_organs(const MachineScene& scene) {
   std::vector<SweepOrgan> out;
   for (std::size_t i = 0; i < scene.organs().size(); ++i) {
     const Organ& o = scene.organs()[i];
-    if (kind == StepKind::kBendUp && o.name == "blade.lower") continue;
     out.push_back({static_cast<int>(i), o.mesh.get(), o.pose});
   }
   return out;
@@ -242,7 +240,7 @@ TEST(P4Safety, ValidatorAgreesWithPlainAdvancementOnTheWholeBody) {
     Motion motion;
     std::vector<Plate> plates;
     if (!bend_body(model, r, body, motion, plates)) continue;
-    std::vector<SweepOrgan> organs = sweep_organs(*scene, r.step.kind);
+    std::vector<SweepOrgan> organs = sweep_organs(*scene);
     std::vector<std::shared_ptr<MeshBvh>> manipulator;
     for (const Plate& p : manipulator_plates(model.manipulator, Vec2(r.state.manipulator_x_mm, r.state.manipulator_y_mm), 0.0,
                                              r.part.thickness_mm())) {

@@ -841,7 +841,6 @@ OracleSetup build_setup(const MachineModel& model, MachineScene& scene, const Ca
   }
   const double lift = is_moving_whole(kind) ? model.aba_lift_for_rotation_mm : 0.0;
   for (const Organ& organ : scene.organs()) {
-    if (kind == StepKind::kBendUp && organ.name == "blade.lower") continue;  // it forms the bend
     Obstacle ob;
     ob.name = organ.name;
     ob.profile = organ.profile_yz;
