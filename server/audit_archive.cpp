@@ -38,6 +38,7 @@ Result<bool> AuditArchive::save(const std::string& job_id, const AuditJob& job, 
     to_proto(o.box.min, a->mutable_box_min());
     to_proto(o.box.max, a->mutable_box_max());
   }
+  for (const std::string& option : job.answer_options()) archived.add_answer_options(option);
   const std::string bytes = archived.SerializeAsString();
   sqlite3_stmt* stmt = nullptr;
   sqlite3_prepare_v2(db_, "INSERT OR REPLACE INTO audits (id, scene_id, data) VALUES (?, ?, ?)", -1, &stmt, nullptr);
@@ -75,7 +76,8 @@ std::vector<std::pair<std::string, std::shared_ptr<AuditJob>>> AuditArchive::loa
       const Vec3 hi(o.box_max().x_mm(), o.box_max().y_mm(), o.box_max().z_mm());
       objects.push_back({o.id(), o.name(), o.category(), Aabb{lo, hi}});
     }
-    out.emplace_back(id, AuditJob::restored(std::move(scene).value(), snapshot_from_report(archived.report()), std::move(objects)));
+    out.emplace_back(id, AuditJob::restored(std::move(scene).value(), snapshot_from_report(archived.report()), std::move(objects),
+                                            {archived.answer_options().begin(), archived.answer_options().end()}));
   }
   sqlite3_finalize(stmt);
   if (unreadable) *unreadable = bad;

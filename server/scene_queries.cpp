@@ -1,6 +1,7 @@
 #include "server/scene_queries.h"
 
 #include <algorithm>
+#include <sstream>
 #include <cstdlib>
 #include <cmath>
 #include <functional>
@@ -226,11 +227,35 @@ AuditSnapshot AuditJob::wait_for_change(unsigned long long seen_done, AuditStatu
   return state_;
 }
 
-std::shared_ptr<AuditJob> AuditJob::restored(SceneRecord scene, AuditSnapshot snapshot, std::vector<AuditedObject> objects) {
+std::shared_ptr<AuditJob> AuditJob::restored(SceneRecord scene, AuditSnapshot snapshot, std::vector<AuditedObject> objects,
+                                            std::vector<std::string> answer_options) {
   auto job = std::make_shared<AuditJob>(std::move(scene), AuditOptions{});
   job->state_ = std::move(snapshot);
   job->objects_ = std::move(objects);
+  job->restored_answer_options_ = std::move(answer_options);
+  // Archived before the options were kept: never equal to any audit's, so never reused.
+  if (job->restored_answer_options_.empty()) job->restored_answer_options_ = {"unrecorded"};
   return job;
+}
+
+std::vector<std::string> AuditJob::answer_options() const {
+  if (!restored_answer_options_.empty()) return restored_answer_options_;
+  auto number = [](double v) {
+    std::ostringstream s;
+    s.precision(17);
+    s << v;
+    return s.str();
+  };
+  std::vector<std::string> out = {"clearance_mm=" + number(options_.clearance_mm),
+                                  "compute_depth=" + std::string(options_.compute_depth ? "true" : "false"),
+                                  "compute_volume=" + std::string(options_.compute_volume ? "true" : "false"),
+                                  "region_merge_mm=" + number(options_.region_merge_mm),
+                                  "max_contacts_per_pair=" + std::to_string(options_.max_contacts_per_pair)};
+  std::string rules;
+  for (const ContactRule& r : options_.rules)
+    rules += r.name + ":" + r.category_a + "/" + r.category_b + (r.same_group_only ? "/same_group" : "") + ";";
+  out.push_back("rules=" + rules);
+  return out;
 }
 
 void AuditJobs::restore(const std::string& id, std::shared_ptr<AuditJob> job) {

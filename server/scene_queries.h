@@ -103,7 +103,12 @@ class AuditJob {
   AuditJob(SceneRecord scene, AuditOptions options, std::shared_ptr<const AuditJob> baseline = nullptr)
       : scene_(std::move(scene)), options_(std::move(options)), baseline_(std::move(baseline)) {}
   // A job that ended before the daemon restarted, as the archive kept it.
-  static std::shared_ptr<AuditJob> restored(SceneRecord scene, AuditSnapshot snapshot, std::vector<AuditedObject> objects);
+  static std::shared_ptr<AuditJob> restored(SceneRecord scene, AuditSnapshot snapshot, std::vector<AuditedObject> objects,
+                                            std::vector<std::string> answer_options);
+  // The options the answers depend on, each "name=value" (clearance, rules, depth, volume, region
+  // merge, contacts kept): a re-audit may reuse a baseline's answers only when they are equal.
+  // (Tiles and threads change how the work is split, never the answers.)
+  std::vector<std::string> answer_options() const;
   // on_end sees the final state before it is published (the daemon archives it there).
   void run(PartRegistry& parts, std::function<void(const AuditSnapshot&)> on_end = {});
   void cancel() { cancelled_ = true; }
@@ -120,6 +125,7 @@ class AuditJob {
   std::function<void(const AuditSnapshot&)> on_end_;
   SceneRecord scene_;
   AuditOptions options_;
+  std::vector<std::string> restored_answer_options_;  // for a restored job (its options are not kept)
   std::shared_ptr<const AuditJob> baseline_;
   std::atomic<bool> cancelled_{false};
   std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();

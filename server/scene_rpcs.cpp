@@ -220,6 +220,17 @@ grpc::ServerUnaryReactor* GatekeeperService::StartAudit(grpc::CallbackServerCont
       return finish(ctx, stats_, "StartAudit", t0, {grpc::StatusCode::INVALID_ARGUMENT, "baseline_job_id: audited another scene"});
     if (base.value()->snapshot().status != AuditStatus::kDone)
       return finish(ctx, stats_, "StartAudit", t0, {grpc::StatusCode::FAILED_PRECONDITION, "baseline_job_id: has not finished"});
+    // The baseline's answers carry over only when they were computed with the same options.
+    const std::vector<std::string> then = base.value()->answer_options();
+    const std::vector<std::string> now = AuditJob(scene.value(), checked.value()).answer_options();
+    for (std::size_t i = 0; i < now.size(); ++i)
+      if (i >= then.size() || then[i] != now[i]) {
+        const std::string name = now[i].substr(0, now[i].find('='));
+        return finish(ctx, stats_, "StartAudit", t0,
+                      {grpc::StatusCode::FAILED_PRECONDITION,
+                       name + ": the baseline was audited with " + (i < then.size() ? then[i] : std::string("unknown options")) +
+                           ", this audit asks " + now[i] + "; re-audit against a baseline with the same options, or audit in full"});
+      }
     baseline = base.value();
   }
   auto job = std::make_shared<AuditJob>(scene.value(), checked.value(), baseline);

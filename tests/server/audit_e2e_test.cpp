@@ -264,6 +264,24 @@ TEST(AuditE2E, AFactoryAuditWithRulesEqualsEveryPairAndItsPageDrawsInChromium) {
   s = stub->StartAudit(&b2, bad, &job);
   EXPECT_EQ(s.error_code(), grpc::StatusCode::NOT_FOUND);
   EXPECT_NE(s.error_message().find("baseline_job_id"), std::string::npos);
+  // A baseline computed with other options is never reused: its answers would be stale (a 30 mm
+  // pair is no violation at a 20 mm clearance, but is one at 50). Refused, naming the option.
+  for (auto change : std::vector<std::function<void(pb::StartAuditRequest&)>>{
+           [](pb::StartAuditRequest& r) { r.set_clearance_mm(r.clearance_mm() + 40.0); },
+           [](pb::StartAuditRequest& r) { r.mutable_rules(0)->set_same_group_only(!r.rules(0).same_group_only()); },
+           [](pb::StartAuditRequest& r) { r.set_compute_depth(!r.compute_depth()); }}) {
+    pb::StartAuditRequest other = again;
+    change(other);
+    grpc::ClientContext c;
+    s = stub->StartAudit(&c, other, &job);
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::FAILED_PRECONDITION) << s.error_message();
+    EXPECT_NE(s.error_message().find("the baseline was audited with"), std::string::npos) << s.error_message();
+  }
+  pb::StartAuditRequest clearance = again;
+  clearance.set_clearance_mm(again.clearance_mm() + 40.0);
+  grpc::ClientContext c3;
+  s = stub->StartAudit(&c3, clearance, &job);
+  EXPECT_EQ(s.error_message().rfind("clearance_mm", 0), 0u) << s.error_message();
 }
 
 TEST(AuditE2E, ADragStreamAnswersLikeSingleMovesEvenWhenOthersEditTheScene) {
