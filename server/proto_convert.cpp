@@ -67,9 +67,9 @@ Result<p4::MachineState> to_state(const pb::MachineState& in, const p4::MachineM
 }
 
 Result<p4::SheetPart> to_part(const pb::SheetPart& in, PartRegistry& parts) {
+  if (!(in.deflection_mm() >= 0.0) || !(in.deflection_mm() <= 1000.0))
+    return invalid_argument("part.deflection_mm", "must be in [0, 1000] mm (0: the default)");
   if (!in.part_id().empty()) {
-    if (!(in.deflection_mm() >= 0.0) || !(in.deflection_mm() <= 1000.0))
-      return invalid_argument("part.deflection_mm", "must be in [0, 1000] mm (0: the default)");
     const double deflection = in.deflection_mm() > 0.0 ? in.deflection_mm() : kPartDeflectionMm;
     auto loaded = parts.load(in.part_id(), deflection);
     if (!loaded.ok()) return Error{loaded.error().code, "part.part_id", loaded.error().message};

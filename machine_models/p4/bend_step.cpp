@@ -39,9 +39,16 @@ Result<bool> validate_step(const MachineModel& model, const BendStep& step) {
     return invalid_argument("bend_direction", "must be a finite, non-zero direction");
   if (!std::isfinite(step.lateral_shift_mm) || std::fabs(step.lateral_shift_mm) > model.max_bend_length_mm)
     return invalid_argument("lateral_shift_mm", "must be finite and within the machine's bend length");
+  // Every field is checked whatever the step's kind: a malformed value is an error even where it
+  // would not be used.
+  if (!std::isfinite(step.target_angle_deg) || std::fabs(step.target_angle_deg) >= 180.0)
+    return invalid_argument("target_angle_deg", "must be a finite angle below 180 degrees");
+  if (!std::isfinite(step.rotate_angle_deg) || std::fabs(step.rotate_angle_deg) > 360.0)
+    return invalid_argument("rotate_angle_deg", "must be within [-360, 360] degrees");
+  if (!sane(step.travel_mm.x()) || !sane(step.travel_mm.y()) || !sane(step.travel_mm.z()))
+    return invalid_argument("travel", "must be finite and within 1e5 mm");
   if (step.kind == StepKind::kBendUp || step.kind == StepKind::kBendDown) {
-    if (!std::isfinite(step.target_angle_deg) || !(step.target_angle_deg > 0.0) || step.target_angle_deg >= 180.0)
-      return invalid_argument("target_angle_deg", "must be a magnitude in (0, 180) degrees");
+    if (!(step.target_angle_deg > 0.0)) return invalid_argument("target_angle_deg", "must be a magnitude in (0, 180) degrees");
   }
   if (!sane(step.retract_mm) || step.retract_mm < 0.0) return invalid_argument("retract_mm", "must be >= 0 and at most 1e5 mm");
   if (!std::isfinite(step.turned_deg) || std::fabs(step.turned_deg) > 360.0)

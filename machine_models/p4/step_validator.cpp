@@ -184,6 +184,7 @@ Result<bool> StepValidator::set_state(const MachineState& state) { return scene_
 void StepValidator::clear_caches() {
   memo_.clear();
   prepared_.clear();
+  prepared_triangles_ = 0;
 }
 
 Result<std::shared_ptr<const StepValidator::Prepared>> StepValidator::prepare(const SheetPart& part, const BendStep& step) {
@@ -323,8 +324,15 @@ Result<std::shared_ptr<const StepValidator::Prepared>> StepValidator::prepare(co
                                            " mm, the sheet's upper face at " + std::to_string(t) + " mm)");
 
   auto keep = [&]() {
-    if (prepared_.size() >= options_.prepared_capacity) prepared_.clear();
+    // Bounded by count and by the triangles the bodies hold (a part of a thousand tabs is megabytes).
+    std::size_t triangles = 0;
+    for (const StepBody& b : prep.bodies) triangles += b.whole.mesh ? b.whole.mesh->mesh().triangle_count() * 3 : 0;
+    if (prepared_.size() >= options_.prepared_capacity || prepared_triangles_ + triangles > options_.prepared_triangle_budget) {
+      prepared_.clear();
+      prepared_triangles_ = 0;
+    }
     prepared_[key] = prepared;
+    prepared_triangles_ += triangles;
     return std::shared_ptr<const Prepared>(prepared);
   };
   if (prep.limit.limit != MachineLimit::kNone) return keep();  // denied: no geometry needed
@@ -529,11 +537,17 @@ Vec3 inside_point(const MovingBody& body, const ConvexPolytope& obstacle) {
       }
     }
   if (n > 0) return sum / n;
+  // Edge through edge: the middle of where the deepest plate's box and the obstacle's box overlap.
+  Aabb obstacle_box;
+  for (const Vec3& v : obstacle.vertices) obstacle_box.extend(v);
+  Aabb body_box;
   if (!body.plates.empty()) {
-    const Plate& p = body.plates[naming_plate(body, RigidTransform{}, obstacle, Vec3::Zero())];
-    return p.origin + 0.5 * (p.edge[0] + p.edge[1] + p.edge[2]);
+    for (const Vec3& c : body.plates[naming_plate(body, RigidTransform{}, obstacle, Vec3::Zero())].corners()) body_box.extend(c);
+  } else {
+    for (const Vec3& v : body.points) body_box.extend(v);
   }
-  return body.points.front();
+  const Vec3 lo = body_box.min.cwiseMax(obstacle_box.min), hi = body_box.max.cwiseMin(obstacle_box.max);
+  return 0.5 * (lo + hi);
 }
 
 // The deepest penetration over s in [s0, 1]: a grid of samples, then a golden-section search

@@ -103,7 +103,8 @@ struct ValidatorOptions {
   int correction_search_budget = 16;       // steps validated (memo hits free) while searching a correction
   bool compute_corrections = true;
   std::size_t memo_capacity = 100000;     // answers kept (small)
-  std::size_t prepared_capacity = 2000;   // prepared bodies kept (meshes and BVHs: kilobytes each)
+  std::size_t prepared_capacity = 2000;   // prepared steps kept...
+  std::size_t prepared_triangle_budget = 1000000;  // ...and their bodies' triangles at most (about 250 MB)
 };
 
 // Not thread-safe: give each thread its own validator (they may share nothing but the model).
@@ -139,6 +140,7 @@ class StepValidator {
   ValidatorOptions options_;
   std::unordered_map<std::uint64_t, StepAnswer> memo_;
   std::unordered_map<std::uint64_t, std::shared_ptr<const Prepared>> prepared_;
+  std::size_t prepared_triangles_ = 0;
 };
 
 }  // namespace gk::p4

@@ -139,11 +139,39 @@ TEST(P4Review, AbsurdValuesAreErrorsNamingTheFieldNotExceptions) {
   rotate.rotate_angle_deg = 10.0;
   rotate.retract_mm = 1e7;
   EXPECT_EQ(e.validator->validate(SheetPart::create(spec).value(), rotate).error().field, "retract_mm");
+  // Fields the step's kind does not use are checked all the same.
+  BendStep clamp = bend(StepKind::kClamp, 650.0, 90.0);
+  clamp.travel_mm.x() = std::nan("");
+  EXPECT_EQ(e.validator->validate(SheetPart::create(spec).value(), clamp).error().field, "travel");
+  clamp = bend(StepKind::kClamp, 650.0, 90.0);
+  clamp.rotate_angle_deg = 1e308;
+  EXPECT_EQ(e.validator->validate(SheetPart::create(spec).value(), clamp).error().field, "rotate_angle_deg");
+  rotate.retract_mm = 0.0;
+  rotate.target_angle_deg = 1e308;
+  EXPECT_EQ(e.validator->validate(SheetPart::create(spec).value(), rotate).error().field, "target_angle_deg");
   std::string toml = embedded_default_model_toml();
   toml.replace(toml.find("x_mm = [-1400.0, 1400.0]"), 24, "x_mm = [-1e300, 1e300]");
   auto model = parse_machine_model(toml);
   ASSERT_FALSE(model.ok());
   EXPECT_NE(model.error().field.find("x_mm"), std::string::npos) << model.error().to_string();
+}
+
+TEST(P4Review, ABodyThatStartsInsideAnOrganIsReportedWhereTheyOverlap) {
+  // A 175 mm flange hanging down at the bend line stands in the parked blade (Z -175..-120) before
+  // a 3 degree rotation begins.
+  Engine e = make_engine(1.5);
+  ASSERT_TRUE(e.validator->set_state(state_at(1.5, -380.0)).ok());
+  SheetPartSpec spec{1000.0, 740.0, 1.5, {{Side::kYMax, 175.0, -90.0, 0.0, 0.0}}, {}};
+  BendStep rotate = bend(StepKind::kRotate, 500.0, 90.0);
+  rotate.rotate_angle_deg = 3.0;
+  auto a = e.validator->validate(SheetPart::create(spec).value(), rotate, false).value();
+  ASSERT_EQ(a.verdict, Verdict::kCollision) << a.reason;
+  const StepCollision& c = a.collisions.front();
+  const Organ* organ = nullptr;
+  for (const Organ& o : e.scene->organs())
+    if (o.name == c.organ) organ = &o;
+  ASSERT_NE(organ, nullptr);
+  EXPECT_TRUE(organ->box.expanded(1e-6).contains(Aabb{c.point_mm, c.point_mm})) << c.organ << " " << c.point_mm.transpose();
 }
 
 }  // namespace
