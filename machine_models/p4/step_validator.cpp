@@ -734,9 +734,15 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
     if (body.moves) continue;
     const Aabb reach = body.whole.mesh->root_bounds().expanded(window);
     for (int i : scene_->organs_overlapping(reach)) {
+      // Which version of the body meets this organ is known from the organ alone: most organs a
+      // flat held part meets are its contact organs, with nothing outside the contact layer.
+      Obstacle probe;
+      probe.support = organs[i].support;
+      probe.top_z = organs[i].box.max.z();
+      probe.pressing = clamped && organs[i].is_aba_segment && organs[i].engaged;
+      if (!version_for(body, probe)) continue;
       const Obstacle ob = obstacle_of(i);
       const MovingBody* version = version_for(body, ob);
-      if (!version) continue;
       double depth = 0.0;
       const bool inside = starts_inside(body, *version, ob, depth);
       DistanceRequest req;
