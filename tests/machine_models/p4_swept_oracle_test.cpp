@@ -201,13 +201,10 @@ Aabb sweep_box_points(const std::vector<Vec3>& points, const OMotion& m) {
 }
 
 Aabb sweep_box(const std::vector<Plate>& plates, const OMotion& m) {
-  Aabb b;
-  for (int k = 0; k < 3; ++k) {
-    const Vec3 e = Vec3::Unit(k);
-    b.min[k] = sweep_min(plates, m, e);
-    b.max[k] = -sweep_min(plates, m, -e);
-  }
-  return b;
+  std::vector<Vec3> points;
+  for (const Plate& plate : plates)
+    for (const Vec3& q : plate.corners()) points.push_back(q);
+  return sweep_box_points(points, m);
 }
 
 // ------------------------------------------------------------------------------------------------
