@@ -35,6 +35,7 @@ Result<RawMesh> read_obj(std::string_view bytes) {
         polygon.push_back(index);
       }
       if (polygon.size() < 3) return line_error(scanner.line_number(), "a face needs at least three vertices");
+      if (polygon.size() > 65536) return line_error(scanner.line_number(), "a face of more than 65,536 vertices");
       for (std::size_t k = 1; k + 1 < polygon.size(); ++k) {
         pending.push_back({polygon[0], polygon[k], polygon[k + 1]});
         face_line.push_back(scanner.line_number());

@@ -24,8 +24,9 @@ Result<RawMesh> read_off(std::string_view bytes) {
   std::string_view line;
   if (!next_content(scanner, line)) return invalid_argument("header", "empty OFF file");
   const std::string_view magic = next_word(line);
-  if (magic.size() < 3 || magic.substr(magic.size() - 3) != "OFF")
-    return line_error(scanner.line_number(), "an OFF file starts with OFF");
+  // OFF, or with per-vertex colours (C), normals (N) or both: still three coordinates first.
+  if (magic != "OFF" && magic != "COFF" && magic != "NOFF" && magic != "CNOFF")
+    return line_error(scanner.line_number(), "an OFF file starts with OFF, COFF, NOFF or CNOFF");
   // The counts may follow the header word on its line, or stand on the next.
   std::string_view counts = line;
   {

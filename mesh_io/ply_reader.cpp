@@ -106,6 +106,8 @@ Result<RawMesh> read_ply(std::string_view bytes) {
     } else if (keyword == "element") {
       Element e;
       e.name = std::string(next_word(line));
+      for (const Element& other : elements)
+        if (other.name == e.name) return line_error(scanner.line_number(), "element '" + e.name + "' declared twice");
       if (!parse_integer(next_word(line), e.count) || e.count < 0)
         return line_error(scanner.line_number(), "an element needs a count");
       elements.push_back(std::move(e));
@@ -126,6 +128,7 @@ Result<RawMesh> read_ply(std::string_view bytes) {
       p.name = std::string(next_word(line));
       elements.back().properties.push_back(std::move(p));
     } else if (keyword == "end_header") {
+      if (!at_end(line)) return line_error(scanner.line_number(), "end_header stands alone on its line");
       ended = true;
     } else if (keyword != "comment" && keyword != "obj_info" && !keyword.empty()) {
       return line_error(scanner.line_number(), "unknown header line '" + std::string(keyword) + "'");
@@ -179,11 +182,12 @@ Result<RawMesh> read_ply(std::string_view bytes) {
             else values[k] = v;
           }
         }
+        if (!at_end(line)) return line_error(scanner.line_number(), "more values than the element's properties");
       } else {
         for (std::size_t k = 0; k < e.properties.size(); ++k) {
           const Property& p = e.properties[k];
           double n = 1.0;
-          if (p.is_list && (!binary.read(p.count_type, n) || n < 0.0 || n > 1000000.0))
+          if (p.is_list && (!binary.read(p.count_type, n) || !(n >= 0.0 && n <= 1000000.0 && n == std::floor(n))))
             return invalid_argument(where + std::to_string(item) + "]", "list count missing or absurd");
           for (long long j = 0; j < static_cast<long long>(n); ++j) {
             double v = 0.0;

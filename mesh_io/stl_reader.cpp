@@ -47,6 +47,7 @@ Result<RawMesh> read_ascii(std::string_view bytes) {
       double xyz[3];
       for (double& c : xyz)
         if (!parse_double(next_word(line), c)) return line_error(scanner.line_number(), "a vertex needs three finite coordinates");
+      if (!at_end(line)) return line_error(scanner.line_number(), "a vertex has exactly three coordinates");
       mesh.vertices.emplace_back(xyz[0], xyz[1], xyz[2]);
       ++in_facet;
     } else if (keyword == "endfacet") {

@@ -16,13 +16,14 @@ class TextScanner {
  public:
   explicit TextScanner(std::string_view text) : text_(text) {}
 
-  // The next line (without its end), false at the end of the text. Counts lines from 1.
+  // The next line (without its end: LF, CRLF or a lone CR), false at the end of the text. Counts
+  // lines from 1.
   bool next_line(std::string_view& line) {
     if (pos_ >= text_.size()) return false;
-    const std::size_t end = text_.find('\n', pos_);
+    const std::size_t end = text_.find_first_of("\r\n", pos_);
     line = text_.substr(pos_, end == std::string_view::npos ? std::string_view::npos : end - pos_);
-    pos_ = end == std::string_view::npos ? text_.size() : end + 1;
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    if (end == std::string_view::npos) pos_ = text_.size();
+    else pos_ = end + ((text_[end] == '\r' && end + 1 < text_.size() && text_[end + 1] == '\n') ? 2 : 1);
     ++line_number_;
     return true;
   }
@@ -50,18 +51,27 @@ inline std::string_view next_word(std::string_view& line) {
 
 // A finite double written as text (a leading '+' allowed); false for anything else.
 inline bool parse_double(std::string_view word, double& out) {
-  if (!word.empty() && word.front() == '+') word.remove_prefix(1);
+  if (!word.empty() && word.front() == '+') {
+    word.remove_prefix(1);
+    if (!word.empty() && (word.front() == '-' || word.front() == '+')) return false;  // "+-5" is no number
+  }
   if (word.empty()) return false;
   const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), out);
   return ec == std::errc() && end == word.data() + word.size() && std::isfinite(out);
 }
 
 inline bool parse_integer(std::string_view word, long long& out) {
-  if (!word.empty() && word.front() == '+') word.remove_prefix(1);
+  if (!word.empty() && word.front() == '+') {
+    word.remove_prefix(1);
+    if (!word.empty() && (word.front() == '-' || word.front() == '+')) return false;
+  }
   if (word.empty()) return false;
   const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), out);
   return ec == std::errc() && end == word.data() + word.size();
 }
+
+// True when nothing but blanks is left of the line.
+inline bool at_end(std::string_view line) { return next_word(line).empty(); }
 
 inline Error line_error(std::size_t line, const std::string& message) {
   return invalid_argument("line " + std::to_string(line), message);

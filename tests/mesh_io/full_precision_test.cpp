@@ -174,6 +174,28 @@ TEST(FullPrecision, CountsAndIndicesThatDoNotMatchTheDataAreErrorsNamingWhere) {
   EXPECT_FALSE(read_mesh_bytes("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", "obj").ok());
 }
 
+TEST(FullPrecision, WhatAReviewerSentIsReadAsWrittenOrRefused) {
+  // A lone CR ends a line: nothing is silently dropped.
+  auto cr = read_mesh_bytes("v 0 0 0\rv 9 9 9\nv 1 0 0\nv 0 1 0\nv 5 5 5\nf 1 2 3\n", "obj");
+  ASSERT_TRUE(cr.ok()) << cr.error().to_string();
+  EXPECT_EQ(cr.value().bounds().max, Vec3(9, 9, 9));
+  // "+-5" is no number; a vertex of four coordinates or a data line with more values is refused.
+  EXPECT_FALSE(read_mesh_bytes("v +-5 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "obj").ok());
+  EXPECT_FALSE(read_mesh_bytes("solid s\nfacet normal 0 0 0\nouter loop\nvertex 0 0 0 7\nvertex 1 0 0\nvertex 0 1 0\n"
+                               "endloop\nendfacet\nendsolid s\n", "stl").ok());
+  EXPECT_FALSE(read_mesh_bytes("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                               "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0 9 9\n1 0 0\n0 1 0\n3 0 1 2\n",
+                               "ply").ok());
+  // A binary PLY whose list count is a float NaN.
+  std::string ply = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                    "property float z\nelement face 1\nproperty list float int vertex_indices\nend_header\n";
+  for (int k = 0; k < 9; ++k) put<float>(ply, static_cast<float>(k % 3 == 0 ? 1 : 0));
+  put<float>(ply, std::nanf(""));
+  for (int i : {0, 1, 2}) put<std::int32_t>(ply, i);
+  EXPECT_FALSE(read_mesh_bytes(ply, "ply").ok());
+  EXPECT_FALSE(read_mesh_bytes("XYZOFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "off").ok());
+}
+
 TEST(FullPrecision, MutatedFilesComeBackAsMeshesOrErrorsNeverACrash) {
   // Bytes flipped, cut and duplicated at random in valid files of every format.
   const Box box{50000.0, 50100.0, 0.0, 100.0, 0.0, 100.0};
