@@ -371,7 +371,6 @@ Result<SweepOutcome> conservative_advance(const std::vector<SweepPair>& pairs, c
       out.min_clearance_point = a.min_point;
       out.min_clearance_s = a.min_s;
     }
-    out.certified_clearance_mm = std::min(out.certified_clearance_mm, a.certified);
   }
   return out;
 }

@@ -68,7 +68,6 @@ struct SweepOutcome {
   Vec3 point_on_body = Vec3::Zero(), point_on_organ = Vec3::Zero();  // machine coordinates
   Vec3 normal = Vec3::Zero();     // at contact: from the organ towards the body, before they met
   double min_clearance_mm = std::numeric_limits<double>::infinity();  // smallest sampled clearance
-  double certified_clearance_mm = std::numeric_limits<double>::infinity();  // a proven lower bound
   int min_clearance_organ = -1;   // index into the organ (or pair) list
   double min_clearance_s = 0.0;
   Vec3 min_clearance_point = Vec3::Zero();

@@ -167,7 +167,6 @@ struct StepValidator::Prepared {
   std::vector<StepBody> bodies;
   mutable std::vector<std::shared_ptr<MeshBvh>> manipulator_meshes;  // bends: the manipulator as obstacles
   std::vector<Plate> manipulator_plates;
-  std::vector<Plate> part_plates;  // every plate of the part, placed (for naming features)
   Motion motion;
   bool has_motion = false;
   double extra_clearance_mm = 0.0;  // a tessellated part's deflection, added to every clearance
@@ -242,8 +241,6 @@ Result<std::shared_ptr<const StepValidator::Prepared>> StepValidator::prepare(co
     }
     for (Plate& p : held_plates) p = p.transformed(placement);
     for (Plate& p : moving_plates) p = p.transformed(placement);
-    prep.part_plates = held_plates;
-    prep.part_plates.insert(prep.part_plates.end(), moving_plates.begin(), moving_plates.end());
   }
 
   // The motion.
