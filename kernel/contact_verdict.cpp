@@ -60,6 +60,17 @@ bool triangle_pair_crosses(const MeshBvh& a, const RigidTransform& pose_a, std::
   return true;
 }
 
+const char* to_string(InconclusiveReason r) {
+  switch (r) {
+    case InconclusiveReason::kNone: return "NONE";
+    case InconclusiveReason::kDegenerateTriangles: return "DEGENERATE_TRIANGLES";
+    case InconclusiveReason::kTessellationUnresolved: return "TESSELLATION_UNRESOLVED";
+    case InconclusiveReason::kBrepUndecided: return "BREP_UNDECIDED";
+    case InconclusiveReason::kPairFailed: return "PAIR_FAILED";
+  }
+  return "PAIR_FAILED";
+}
+
 int severity(Verdict v) {
   switch (v) {
     case Verdict::kClear: return 0;
@@ -151,9 +162,11 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
                             : "meshes intersect (open meshes: any contact counts as a collision)";
     } else if (decided_on_degenerate > 0) {
       out.verdict = Verdict::kInconclusive;
+      out.inconclusive_reason = InconclusiveReason::kDegenerateTriangles;
       out.reason = "contact decided on zero-area triangles only";
-    } else if (col.truncated) {  // open meshes only: any contact is a collision there anyway
+    } else if (col.truncated) {  // open meshes only: the listed pairs were all degenerate
       out.verdict = Verdict::kInconclusive;
+      out.inconclusive_reason = InconclusiveReason::kDegenerateTriangles;
       out.reason = "contact list truncated before every pair was classified";
     } else {
       out.verdict = Verdict::kTouching;

@@ -26,6 +26,24 @@ enum class Verdict { kClear, kTouching, kCollision, kInconclusive };
 
 const char* to_string(Verdict v);
 
+// Why an answer is INCONCLUSIVE (a denial all the same). Each value is what could not be decided:
+enum class InconclusiveReason {
+  kNone,
+  // The only intersecting triangle pairs involve zero-area triangles: touching or crossing has no
+  // meaning there. Repair the mesh.
+  kDegenerateTriangles,
+  // A CAD part closer to a mesh than its tessellation's deflection: its exact faces were measured
+  // against the mesh's triangles there, but they meet, and no point of either was found inside the
+  // other. Touching or crossing would need the mesh as a solid B-Rep.
+  kTessellationUnresolved,
+  // Two CAD parts closer than their tessellations' deflections, and the exact-face decision
+  // (OCCT's distance, classifier or Boolean common) failed; the reason text says which.
+  kBrepUndecided,
+  // The pair could not be computed at all (for example a failed query in an audit): see the text.
+  kPairFailed,
+};
+const char* to_string(InconclusiveReason r);
+
 // How much a verdict blocks, for taking the worst of several: CLEAR < TOUCHING < INCONCLUSIVE <
 // COLLISION (an inconclusive answer is treated as a denial, but a proven collision is worse).
 int severity(Verdict v);
@@ -41,6 +59,7 @@ struct VerdictOptions {
 
 struct VerdictResult {
   Verdict verdict = Verdict::kInconclusive;
+  InconclusiveReason inconclusive_reason = InconclusiveReason::kNone;  // set with kInconclusive
   std::string reason;
   double distance_mm = 0.0;  // minimum distance; 0 when in contact
   bool distance_is_lower_bound = false;  // apart by at least distance_mm (VerdictOptions' bound)

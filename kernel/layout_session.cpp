@@ -57,6 +57,8 @@ Result<std::unique_ptr<LayoutSession>> LayoutSession::create(std::vector<AuditOb
     const std::string field = "objects[" + std::to_string(i) + "]";
     if (!objects[i].mesh) return invalid_argument(field + ".mesh", "is missing");
     if (!objects[i].pose.is_finite() || !objects[i].pose.is_rigid()) return invalid_argument(field + ".pose", "must be a finite rigid transform");
+    if (!(objects[i].surface_deviation_mm >= 0.0 && objects[i].surface_deviation_mm <= 1000.0))
+      return invalid_argument(field + ".surface_deviation_mm", "must be in [0, 1000] mm");
   }
   std::unique_ptr<LayoutSession> s(new LayoutSession());
   s->objects_ = std::move(objects);
@@ -70,7 +72,10 @@ Result<std::unique_ptr<LayoutSession>> LayoutSession::create(std::vector<AuditOb
     const Aabb b = transformed_box(o.mesh->root_bounds(), o.pose);
     magnitude = std::max({magnitude, b.min.cwiseAbs().maxCoeff(), b.max.cwiseAbs().maxCoeff()});
   }
-  s->needed_gap_mm_ = std::max(clearance_mm, tolerances::kContactMm) + 1e-9 * magnitude;
+  // CAD parts: pairs within their tessellations' deviations of the clearance are reported too.
+  double deviation = 0.0;
+  for (const AuditObject& o : s->objects_) deviation = std::max(deviation, o.surface_deviation_mm);
+  s->needed_gap_mm_ = std::max(clearance_mm + 2.0 * deviation, tolerances::kContactMm) + 1e-9 * magnitude;
   s->boxes_.resize(n);
   s->obbs_.resize(n);
   s->stamp_.assign(n, 0);
@@ -146,7 +151,8 @@ Result<FrameAnswer> LayoutSession::move_to(const RigidTransform& pose) {
     ++out.exact_checks;
     VerdictOptions options;
     options.max_contacts = kFirstContacts;
-    options.distance_upper_bound_mm = clearance_mm_;
+    const double reach = clearance_mm_ + self.surface_deviation_mm + other.surface_deviation_mm;
+    options.distance_upper_bound_mm = reach;
     auto v = assess(*self.mesh, pose, *other.mesh, other.pose, options);
     if (!v.ok()) return v.error();  // assess decides over every pair; the cap is on the contacts listed
     const VerdictResult& r = v.value();
@@ -154,7 +160,7 @@ Result<FrameAnswer> LayoutSession::move_to(const RigidTransform& pose) {
       crossing_[id] = {r.contacts[r.first_crossing].triangle_a, r.contacts[r.first_crossing].triangle_b};
     else
       crossing_.erase(id);
-    if (r.verdict == Verdict::kClear && r.distance_mm >= clearance_mm_) continue;
+    if (r.verdict == Verdict::kClear && r.distance_mm >= reach) continue;
     out.contacts.push_back({id, r.verdict, r.distance_mm, r.point_a, r.point_b});
     if (severity(r.verdict) > severity(out.worst)) out.worst = r.verdict;
   }

@@ -48,6 +48,8 @@ class LayoutSession {
                                                        double clearance_mm);
   Result<FrameAnswer> move_to(const RigidTransform& pose);
   const AuditObject& moving() const { return objects_[moving_]; }
+  std::uint32_t moving_index() const { return moving_; }
+  const RigidTransform& pose_of(std::uint32_t object) const { return objects_[object].pose; }
 
  private:
   LayoutSession() = default;

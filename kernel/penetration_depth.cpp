@@ -1,6 +1,7 @@
 #include "kernel/penetration_depth.h"
 
 #include "kernel/convex_decomposition.h"
+#include "kernel/convexity.h"
 #include "kernel/mesh_collision.h"
 #include "kernel/mesh_distance.h"
 
@@ -62,9 +63,10 @@ Result<PieceAxes> piece_axes(const MeshBvh& a, const RigidTransform& pose_a, con
     if (!seen) out.directions.push_back(dir);
     if (static_cast<int>(out.directions.size()) >= kMaxPieceDirections) break;
   }
+  // Exact only for truly convex solids (every edge convex, volume equal to the hull's): a piece
+  // with all its vertices on its hull can still be a V-groove or a U-channel.
   out.both_convex_whole = all_edges && out.pieces_a == 1 && out.pieces_b == 1 && out.max_concavity_mm == 0.0 &&
-                          a.mesh().report().closed && b.mesh().report().closed &&
-                          whole_a && whole_b;
+                          whole_a && whole_b && is_convex_solid(a.mesh()) && is_convex_solid(b.mesh());
   return out;
 }
 

@@ -52,16 +52,21 @@ std::vector<ClashRegion> regions_of(const std::vector<ProximityPair>& pairs, dou
 bool audit_pair(const AuditObject& oa, const AuditObject& ob, const AuditOptions& options, PairClash& out) {
   VerdictOptions vo;
   vo.max_contacts = options.max_contacts_per_pair;
-  vo.distance_upper_bound_mm = options.clearance_mm;  // farther than the clearance: not a clash, no need to measure
+  // Farther than the clearance (plus the window the triangles of CAD parts cannot resolve): not a
+  // clash, no need to measure.
+  const double reach = options.clearance_mm + oa.surface_deviation_mm + ob.surface_deviation_mm;
+  vo.distance_upper_bound_mm = reach;
   auto v = assess(*oa.mesh, oa.pose, *ob.mesh, ob.pose, vo);
   if (!v.ok()) {
     out.verdict = Verdict::kInconclusive;  // a gate treats it as a clash
+    out.inconclusive_reason = InconclusiveReason::kPairFailed;
     out.error = v.error().to_string();
     return true;
   }
   const VerdictResult& r = v.value();
-  if (r.verdict == Verdict::kClear && r.distance_mm >= options.clearance_mm) return false;
+  if (r.verdict == Verdict::kClear && r.distance_mm >= reach) return false;
   out.verdict = r.verdict;
+  out.inconclusive_reason = r.inconclusive_reason;
   out.distance_mm = r.distance_mm;
   out.point_a = r.point_a;
   out.point_b = r.point_b;
@@ -104,6 +109,8 @@ std::optional<Error> validate(const std::vector<AuditObject>& objects, const Aud
     const std::string field = "objects[" + std::to_string(i) + "]";
     if (!objects[i].mesh) return invalid_argument(field + ".mesh", "is missing");
     if (!objects[i].pose.is_finite() || !objects[i].pose.is_rigid()) return invalid_argument(field + ".pose", "must be a finite rigid transform");
+    if (!(objects[i].surface_deviation_mm >= 0.0 && objects[i].surface_deviation_mm <= 1000.0))
+      return invalid_argument(field + ".surface_deviation_mm", "must be in [0, 1000] mm");
   }
   for (std::uint32_t id : options.only_objects)
     if (id >= objects.size()) return invalid_argument("only_objects", "no object " + std::to_string(id));
@@ -156,9 +163,11 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
   };
   // Boxes closer than the clearance, or than the contact tolerance (assess calls such a pair
   // TOUCHING), meet; the slack keeps rounding in the box transforms from dropping an exact touch.
-  double magnitude = 1.0;
+  double magnitude = 1.0, deviation = 0.0;
   for (const Aabb& b : boxes) magnitude = std::max({magnitude, b.min.cwiseAbs().maxCoeff(), b.max.cwiseAbs().maxCoeff()});
-  const double margin = std::max(options.clearance_mm, tolerances::kContactMm) + 4.0 * tolerances::kBoxSlackRelative * magnitude;
+  for (const AuditObject& o : objects) deviation = std::max(deviation, o.surface_deviation_mm);
+  const double margin = std::max(options.clearance_mm + 2.0 * deviation, tolerances::kContactMm) +
+                        4.0 * tolerances::kBoxSlackRelative * magnitude;
   std::vector<char> wanted(objects.size(), options.only_objects.empty() ? 1 : 0);
   for (std::uint32_t id : options.only_objects) wanted[id] = 1;
   if (!options.only_objects.empty()) {

@@ -32,6 +32,10 @@ struct AuditObject {
   std::string group;     // an assembly; rules can allow contacts inside one
   std::shared_ptr<const MeshBvh> mesh;
   RigidTransform pose;
+  // How far the object's true surface may lie from its triangles [mm]: a CAD part's tessellation
+  // deflection, 0 for a mesh. A pair is reported up to the clearance plus both deviations, for the
+  // layer above to decide on the exact geometry (the triangles cannot tell within that window).
+  double surface_deviation_mm = 0.0;
 };
 
 // An intended contact (seed 004 §6: parts bolted together, pins in holes): matching pairs are left
@@ -52,6 +56,7 @@ struct ClashRegion {
 struct PairClash {
   std::uint32_t a = 0, b = 0;  // object indices, a < b
   Verdict verdict = Verdict::kClear;
+  InconclusiveReason inconclusive_reason = InconclusiveReason::kNone;
   double distance_mm = 0.0;    // 0 when in contact
   bool clearance_violation = false;  // apart, but closer than the gap
   Vec3 point_a = Vec3::Zero(), point_b = Vec3::Zero();

@@ -60,4 +60,14 @@ inline constexpr double kClearanceReportWindowMm = 10.0;
 // The deepest penetration over a colliding motion is searched to within this. [mm]
 inline constexpr double kStepDepthResolutionMm = 1.0e-3;
 
+// ---- exact faces of CAD parts (decided on the B-Rep when the tessellation cannot tell) ----
+
+// A distance measured on the exact faces (OCCT's BRepExtrema, in a frame local to the contact) is
+// within this of the true one; checked against analytic solids in tests/engine. [mm]
+inline constexpr double kBrepDistanceErrorMm = 1.0e-6;
+
+// Exact boundaries whose Boolean common has a larger volume than this cross (COLLISION); a smaller
+// or empty common is a touching contact. Two R50 spheres overlapping by 1e-4 mm share 8e-7 mm^3. [mm^3]
+inline constexpr double kBrepOverlapVolumeMm3 = 1.0e-9;
+
 }  // namespace gk::tolerances

@@ -2,12 +2,17 @@
 
 #include "occt_adapters/shape_impl.h"
 
+#include <BRepAdaptor_Curve.hxx>
+#include <BRepAdaptor_Surface.hxx>
 #include <BRepBndLib.hxx>
 #include <BRepGProp.hxx>
 #include <Bnd_Box.hxx>
+#include <BRep_Tool.hxx>
 #include <GProp_GProps.hxx>
+#include <Standard_Failure.hxx>
 #include <TopAbs_ShapeEnum.hxx>
 #include <TopExp_Explorer.hxx>
+#include <TopoDS.hxx>
 
 namespace gk::occt {
 
@@ -43,6 +48,22 @@ double Shape::volume() const {
   GProp_GProps props;
   BRepGProp::VolumeProperties(impl_->shape, props);
   return props.Mass();
+}
+
+bool Shape::is_polyhedral() const {
+  if (is_null()) return false;
+  try {
+    for (TopExp_Explorer e(impl_->shape, TopAbs_FACE); e.More(); e.Next())
+      if (BRepAdaptor_Surface(TopoDS::Face(e.Current())).GetType() != GeomAbs_Plane) return false;
+    for (TopExp_Explorer e(impl_->shape, TopAbs_EDGE); e.More(); e.Next()) {
+      const TopoDS_Edge& edge = TopoDS::Edge(e.Current());
+      if (BRep_Tool::Degenerated(edge)) continue;
+      if (BRepAdaptor_Curve(edge).GetType() != GeomAbs_Line) return false;
+    }
+  } catch (const Standard_Failure&) {
+    return false;  // not provably polyhedral: its tessellation keeps its deflection
+  }
+  return true;
 }
 
 }  // namespace gk::occt

@@ -18,6 +18,9 @@ class Shape {
   int solid_count() const;
   Aabb bounds() const;  // of the exact geometry, slightly enlarged by OCCT's tolerances
   double volume() const;  // 0 for shapes without solids
+  // Every face a plane and every edge a straight line: a tessellation of it is the shape itself
+  // (up to rounding), whatever its deflection.
+  bool is_polyhedral() const;
   const Impl& impl() const { return *impl_; }
 
  private:

@@ -8,6 +8,7 @@
 #include <BRep_Tool.hxx>
 #include <Poly_Triangulation.hxx>
 #include <TopExp.hxx>
+#include <TopExp_Explorer.hxx>
 #include <TopLoc_Location.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <TopoDS.hxx>
@@ -28,35 +29,61 @@ Result<MeshedShape> mesh_shape(const Shape& shape, double deflection_mm, double 
   std::vector<Vec3> vertices;
   std::vector<TriangleMesh::Face> faces;
   std::vector<int> face_ids;
-  std::map<std::array<double, 3>, std::uint32_t> vertex_of_point;
   auto ran = guarded("shape", "meshing", [&] {
     const TopoDS_Shape copy = BRepBuilderAPI_Copy(shape.impl().shape, true, false).Shape();
     BRepMesh_IncrementalMesh mesher(copy, deflection_mm, false, angular_deg * M_PI / 180.0, false);
     TopTools_IndexedMapOfShape face_map;
     TopExp::MapShapes(copy, TopAbs_FACE, face_map);
-    for (int f = 1; f <= face_map.Extent(); ++f) {
-      const TopoDS_Face& face = TopoDS::Face(face_map(f));
-      TopLoc_Location location;
-      const Handle(Poly_Triangulation) tri = BRep_Tool::Triangulation(face, location);
-      if (tri.IsNull()) continue;
-      const gp_Trsf trsf = location.Transformation();
-      // Faces share the nodes of their common edges: the same point gets one vertex, so a closed
-      // shape gives a closed mesh.
-      std::vector<std::uint32_t> index(tri->NbNodes() + 1);
-      for (int n = 1; n <= tri->NbNodes(); ++n) {
-        const gp_Pnt p = tri->Node(n).Transformed(trsf);
-        const std::array<double, 3> key = {p.X(), p.Y(), p.Z()};
-        auto [it, fresh] = vertex_of_point.emplace(key, static_cast<std::uint32_t>(vertices.size()));
-        if (fresh) vertices.emplace_back(p.X(), p.Y(), p.Z());
-        index[n] = it->second;
+    // Vertices are merged within one solid only: solids of an assembly that share an edge or a face
+    // stay separate closed bodies (merged, their shared edges would have four triangles and no
+    // body would be closed, so nothing could be found inside them). Faces outside any solid come
+    // last, merged among themselves.
+    std::vector<std::vector<std::pair<int, TopoDS_Face>>> groups;
+    std::vector<char> in_solid(face_map.Extent() + 1, 0);
+    for (TopExp_Explorer solid(copy, TopAbs_SOLID); solid.More(); solid.Next()) {
+      TopTools_IndexedMapOfShape solid_faces;
+      TopExp::MapShapes(solid.Current(), TopAbs_FACE, solid_faces);
+      std::vector<std::pair<int, TopoDS_Face>> group;
+      for (int i = 1; i <= solid_faces.Extent(); ++i) {
+        const int f = face_map.FindIndex(solid_faces(i));
+        if (f < 1) continue;
+        group.emplace_back(f, TopoDS::Face(solid_faces(i)));  // oriented as its solid uses it
+        in_solid[f] = 1;
       }
-      const bool reversed = face.Orientation() == TopAbs_REVERSED;
-      for (int t = 1; t <= tri->NbTriangles(); ++t) {
-        int a, b, c;
-        tri->Triangle(t).Get(a, b, c);
-        if (reversed) std::swap(b, c);
-        faces.push_back({index[a], index[b], index[c]});
-        face_ids.push_back(f);
+      groups.push_back(std::move(group));
+    }
+    std::vector<std::pair<int, TopoDS_Face>> loose;
+    for (int f = 1; f <= face_map.Extent(); ++f)
+      if (!in_solid[f]) loose.emplace_back(f, TopoDS::Face(face_map(f)));
+    groups.push_back(std::move(loose));
+    for (const auto& group : groups) {
+      std::map<std::array<double, 3>, std::uint32_t> vertex_of_point;
+      for (const auto& [f, face] : group) {
+        TopLoc_Location location;
+        const Handle(Poly_Triangulation) tri = BRep_Tool::Triangulation(face, location);
+        if (tri.IsNull()) continue;
+        const gp_Trsf trsf = location.Transformation();
+        // Faces share the nodes of their common edges: the same point gets one vertex, so a closed
+        // solid gives a closed body.
+        std::vector<std::uint32_t> index(tri->NbNodes() + 1);
+        for (int n = 1; n <= tri->NbNodes(); ++n) {
+          const gp_Pnt p = tri->Node(n).Transformed(trsf);
+          const std::array<double, 3> key = {p.X(), p.Y(), p.Z()};
+          auto [it, fresh] = vertex_of_point.emplace(key, static_cast<std::uint32_t>(vertices.size()));
+          if (fresh) vertices.emplace_back(p.X(), p.Y(), p.Z());
+          index[n] = it->second;
+        }
+        const bool reversed = face.Orientation() == TopAbs_REVERSED;
+        for (int t = 1; t <= tri->NbTriangles(); ++t) {
+          int a, b, c;
+          tri->Triangle(t).Get(a, b, c);
+          if (reversed) std::swap(b, c);
+          // At a pole or an apex two nodes of a triangle are one point: the triangle is a segment
+          // that covers nothing, and kept it would leave the mesh open.
+          if (index[a] == index[b] || index[b] == index[c] || index[c] == index[a]) continue;
+          faces.push_back({index[a], index[b], index[c]});
+          face_ids.push_back(f);
+        }
       }
     }
   });

@@ -85,6 +85,9 @@ void report_to_proto(const AuditSnapshot& snapshot, pb::AuditReport* out) {
     p->set_category_a(r.category_a);
     p->set_category_b(r.category_b);
     p->set_verdict(to_proto(c.verdict));
+    p->set_inconclusive_reason(to_proto(c.inconclusive_reason));
+    p->set_decided_on_brep(r.decided_on_brep);
+    p->set_reason(!r.reason.empty() ? r.reason : c.error);
     p->set_distance_mm(c.distance_mm);
     to_proto(c.point_a, p->mutable_point());
     to_proto(c.point_b, p->mutable_point_b());
@@ -149,8 +152,11 @@ AuditSnapshot snapshot_from_report(const pb::AuditReport& report) {
   s.narrow_s = report.narrow_s();
   auto vec = [](const pb::Vec3& v) { return Vec3(v.x_mm(), v.y_mm(), v.z_mm()); };
   for (const pb::Clash& c : report.clashes()) {
-    ClashRecord r{c.object_a(), c.object_b(), c.name_a(), c.name_b(), c.category_a(), c.category_b(), {}};
+    ClashRecord r{c.object_a(), c.object_b(), c.name_a(), c.name_b(), c.category_a(), c.category_b(), {}, false, ""};
     r.clash.verdict = from_proto(c.verdict());
+    r.clash.inconclusive_reason = from_proto(c.inconclusive_reason());
+    r.decided_on_brep = c.decided_on_brep();
+    r.reason = c.reason();
     r.clash.distance_mm = c.distance_mm();
     r.clash.clearance_violation = c.clearance_violation();
     r.clash.point_a = vec(c.point());

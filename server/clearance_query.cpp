@@ -1,12 +1,12 @@
 #include "server/clearance_query.h"
 
+#include "engine/pair_verdict.h"
 #include "kernel/contact_regions.h"
 #include "kernel/contact_verdict.h"
 #include "kernel/interference_volume.h"
 #include "kernel/mesh_distance.h"
 #include "kernel/penetration_depth.h"
-#include "occt_adapters/exact_measures.h"
-#include "occt_adapters/shape_builders.h"
+#include "occt_adapters/brep_contact.h"
 #include "server/proto_convert.h"
 #include "server/rpc_helpers.h"
 
@@ -20,9 +20,6 @@ namespace {
 
 constexpr std::size_t kMaxReportedPairs = 100000;
 constexpr double kDefaultRegionMergeMm = 10.0;
-// B-Rep refinement gives up (keeping the mesh answer and its bound) beyond these many candidates.
-constexpr std::size_t kMaxRefinementPairs = 20000;
-constexpr std::size_t kMaxRefinementFaces = 256;
 // Depth: lattice size and contact resolution [mm] of the advancement along each candidate.
 constexpr int kDepthLatticeDirections = 162;
 constexpr double kDepthResolutionMm = 1e-4;
@@ -75,30 +72,6 @@ void add_regions(const std::vector<ProximityPair>& pairs, double merge_mm, const
   }
 }
 
-// CAD on both sides, apart: the tessellation may hide the true minimum anywhere the mesh distance
-// is within both deflections of its minimum, so every face pair there is measured exactly.
-void refine_on_brep(const PosedSide& a, const PosedSide& b, double mesh_distance_mm, double safety_gap_mm,
-                    pb::ClearanceQueryResponse* response) {
-  const double window = mesh_distance_mm + a.part->deflection_mm + b.part->deflection_mm;
-  auto candidates = pairs_within(*a.part->bvh, a.pose, *b.part->bvh, b.pose, window, kMaxRefinementPairs);
-  if (!candidates.ok() || candidates.value().truncated) return;
-  std::set<std::pair<int, int>> faces;
-  for (const ProximityPair& p : candidates.value().pairs)
-    faces.insert({a.part->face_of_triangle[p.triangle_a], b.part->face_of_triangle[p.triangle_b]});
-  if (faces.size() > kMaxRefinementFaces) return;
-  auto closest = occt::closest_face_pair(a.part->shape, a.pose, b.part->shape, b.pose, {faces.begin(), faces.end()});
-  if (!closest.ok()) return;  // keep the mesh answer and its bound
-  const double best = closest.value().distance.distance_mm;
-  response->set_distance_mm(best);
-  to_proto(closest.value().distance.point_a, response->mutable_point_a());
-  to_proto(closest.value().distance.point_b, response->mutable_point_b());
-  response->set_face_a(static_cast<std::uint32_t>(closest.value().face_a));
-  response->set_face_b(static_cast<std::uint32_t>(closest.value().face_b));
-  response->set_refined_on_brep(true);
-  response->set_error_bound_mm(1e-6);  // BRepExtrema's precision
-  response->set_gap_violated(best < safety_gap_mm);
-}
-
 std::string add_depth(const PosedSide& a, const PosedSide& b, const Vec3& along, pb::ClearanceQueryResponse* response) {
   if (along != Vec3::Zero()) {
     auto d = penetration_along(*a.part->bvh, a.pose, *b.part->bvh, b.pose, along, kDepthResolutionMm);
@@ -121,21 +94,18 @@ std::string add_depth(const PosedSide& a, const PosedSide& b, const Vec3& along,
   return "";
 }
 
-std::string add_volume(const PosedSide& a, const PosedSide& b, pb::ClearanceQueryResponse* response) {
+std::string add_volume(const PosedSide& a, const PosedSide& b, const Vec3& near_point, pb::ClearanceQueryResponse* response) {
   std::string why_not_brep;
   if (a.is_cad() && b.is_cad()) {
-    auto placed_a = occt::place(a.part->shape, a.pose);
-    auto placed_b = occt::place(b.part->shape, b.pose);
-    if (placed_a.ok() && placed_b.ok()) {
-      auto exact = occt::interference_volume(placed_a.value(), placed_b.value());
-      if (exact.ok()) {
-        response->set_interference_volume_mm3(exact.value());
-        response->set_volume_cell_mm(0.0);
-        response->set_volume_method("brep boolean common");
-        return "";
-      }
-      why_not_brep = " (the Boolean common failed: " + exact.error().message + ")";
+    // In a frame local to the overlap: OCCT's Booleans lose overlaps at factory coordinates.
+    auto exact = occt::shared_volume(a.part->shape, a.pose, b.part->shape, b.pose, near_point);
+    if (exact.ok()) {
+      response->set_interference_volume_mm3(exact.value());
+      response->set_volume_cell_mm(0.0);
+      response->set_volume_method("brep boolean common");
+      return "";
     }
+    why_not_brep = " (the Boolean common failed: " + exact.error().message + ")";
   }
   auto volume = interference_volume(*a.part->bvh, a.pose, *b.part->bvh, b.pose, kVolumeRaysPerAxis);
   if (!volume.ok())
@@ -161,10 +131,15 @@ grpc::Status answer_clearance(const pb::ClearanceQueryRequest& request, PartRegi
   if (!rb.ok()) return to_status(rb.error());
   const PosedSide& a = ra.value();
   const PosedSide& b = rb.value();
-  auto verdict = assess(*a.part->bvh, a.pose, *b.part->bvh, b.pose);
-  if (!verdict.ok()) return to_status(verdict.error());
-  const VerdictResult& v = verdict.value();
+  engine::PairVerdictOptions options;
+  options.clearance_mm = request.safety_gap_mm();
+  options.measure_on_brep = true;
+  auto decided = engine::decide_pair({a.part.get(), a.pose}, {b.part.get(), b.pose}, options);
+  if (!decided.ok()) return to_status(decided.error());
+  const engine::PairVerdict& pv = decided.value();
+  const VerdictResult& v = pv.result;
   response->set_verdict(to_proto(v.verdict));
+  response->set_inconclusive_reason(to_proto(v.inconclusive_reason));
   response->set_reason(v.reason);
   response->set_distance_mm(v.distance_mm);
   to_proto(v.point_a, response->mutable_point_a());
@@ -175,30 +150,25 @@ grpc::Status answer_clearance(const pb::ClearanceQueryRequest& request, PartRegi
     if (a.is_cad()) response->set_face_a(static_cast<std::uint32_t>(a.part->face_of_triangle[v.contacts.front().triangle_a]));
     if (b.is_cad()) response->set_face_b(static_cast<std::uint32_t>(b.part->face_of_triangle[v.contacts.front().triangle_b]));
   }
+  if (pv.face_a > 0) response->set_face_a(static_cast<std::uint32_t>(pv.face_a));
+  if (pv.face_b > 0) response->set_face_b(static_cast<std::uint32_t>(pv.face_b));
+  response->set_refined_on_brep(pv.decided_on_brep);
+  response->set_exact_faces_us(1000.0 * pv.brep_ms);
+  response->set_error_bound_mm(pv.error_bound_mm);
   auto near = pairs_within(*a.part->bvh, a.pose, *b.part->bvh, b.pose, request.safety_gap_mm(), kMaxReportedPairs);
   if (!near.ok()) return to_status(near.error());
   response->set_pairs_within_gap(static_cast<std::uint32_t>(near.value().pairs.size()));
   response->set_pairs_truncated(near.value().truncated);
   add_regions(near.value().pairs, request.region_merge_mm() > 0.0 ? request.region_merge_mm() : kDefaultRegionMergeMm,
               a, b, response);
-  // Triangle distances are exact up to rounding (a few ulps of the coordinates); a CAD part's
-  // tessellation lies within its deflection of the surface.
-  const Aabb wa = a.part->mesh->bounds(), wb = b.part->mesh->bounds();
-  const double scale = std::max({wa.min.cwiseAbs().maxCoeff(), wa.max.cwiseAbs().maxCoeff(), wb.min.cwiseAbs().maxCoeff(),
-                                 wb.max.cwiseAbs().maxCoeff(), a.pose.translation.cwiseAbs().maxCoeff(),
-                                 b.pose.translation.cwiseAbs().maxCoeff(), 1.0});
-  response->set_error_bound_mm(a.part->deflection_mm + b.part->deflection_mm + 1e-12 * scale);
-  if (a.is_cad() && b.is_cad() && v.distance_mm > 0.0 && v.verdict != Verdict::kCollision)
-    refine_on_brep(a, b, v.distance_mm, request.safety_gap_mm(), response);
+  response->set_gap_violated(v.verdict != Verdict::kClear || v.distance_mm < request.safety_gap_mm());
   const bool interpenetrating = v.verdict == Verdict::kCollision;
   std::string not_computed;
   const Vec3 along(request.depth_along().x_mm(), request.depth_along().y_mm(), request.depth_along().z_mm());
   if (!along.allFinite()) return {grpc::StatusCode::INVALID_ARGUMENT, "depth_along: must be finite"};
   if (interpenetrating && request.compute_depth()) not_computed += add_depth(a, b, along, response);
-  if (interpenetrating && request.compute_volume()) not_computed += add_volume(a, b, response);
+  if (interpenetrating && request.compute_volume()) not_computed += add_volume(a, b, v.point_a, response);
   response->set_not_computed(not_computed);
-  if (!response->refined_on_brep())
-    response->set_gap_violated(v.distance_mm < request.safety_gap_mm() || v.verdict != Verdict::kClear);
   response->set_elapsed_us(us_since(t0));
   return grpc::Status::OK;
 }

@@ -80,7 +80,8 @@ Result<std::shared_ptr<const LoadedPart>> PartRegistry::load(const std::string& 
   auto bvh = bvh_cache_.get_or_build(part->mesh);
   if (!bvh.ok()) return bvh.error();
   part->bvh = bvh.value();
-  part->deflection_mm = key_deflection;
+  // A CAD part of planes and straight edges is tessellated exactly; curved ones deviate.
+  part->deflection_mm = part->shape.is_polyhedral() ? 0.0 : key_deflection;
   std::lock_guard<std::mutex> lock(mutex_);
   loaded_[{id, key_deflection}] = part;
   return std::shared_ptr<const LoadedPart>(part);

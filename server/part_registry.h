@@ -1,6 +1,7 @@
 // Uploaded parts as meshes, loaded from the store on first use and kept in memory.
 #pragma once
 
+#include "engine/part_geometry.h"
 #include "kernel/bvh_cache.h"
 #include "kernel/mesh_bvh.h"
 #include "occt_adapters/shape.h"
@@ -17,13 +18,9 @@ namespace gk::server {
 // bounds); one value, so a part is tessellated and its tree built once.
 inline constexpr double kPartDeflectionMm = 0.05;
 
-struct LoadedPart {
+// An uploaded part's geometry (engine/part_geometry) and its stored record.
+struct LoadedPart : engine::PartGeometry {
   PartRecord record;
-  std::shared_ptr<const TriangleMesh> mesh;
-  std::shared_ptr<MeshBvh> bvh;
-  double deflection_mm = 0.0;  // CAD parts: the tessellation's deflection; meshes: 0
-  occt::Shape shape;                  // CAD parts: the exact B-Rep
-  std::vector<int> face_of_triangle;  // CAD parts: each triangle's B-Rep face (1-based)
 };
 
 class PartRegistry {

@@ -115,6 +115,17 @@ pb::Verdict to_proto(Verdict v) {
   return pb::INCONCLUSIVE;
 }
 
+pb::InconclusiveReason to_proto(InconclusiveReason r) {
+  switch (r) {
+    case InconclusiveReason::kNone: return pb::INCONCLUSIVE_REASON_UNSPECIFIED;
+    case InconclusiveReason::kDegenerateTriangles: return pb::DEGENERATE_TRIANGLES;
+    case InconclusiveReason::kTessellationUnresolved: return pb::TESSELLATION_UNRESOLVED;
+    case InconclusiveReason::kBrepUndecided: return pb::BREP_UNDECIDED;
+    case InconclusiveReason::kPairFailed: return pb::PAIR_FAILED;
+  }
+  return pb::PAIR_FAILED;
+}
+
 void to_proto(const Vec3& v, pb::Vec3* out) {
   out->set_x_mm(v.x());
   out->set_y_mm(v.y());
@@ -284,6 +295,16 @@ Result<SceneRecord> scene_from_proto(const pb::SceneInfo& in) {
     out.objects[o.object_id()] = {o.object_id(), o.name(), o.category(), o.part_id(), pose.value(), o.group()};
   }
   return out;
+}
+
+InconclusiveReason from_proto(pb::InconclusiveReason r) {
+  switch (r) {
+    case pb::DEGENERATE_TRIANGLES: return InconclusiveReason::kDegenerateTriangles;
+    case pb::TESSELLATION_UNRESOLVED: return InconclusiveReason::kTessellationUnresolved;
+    case pb::BREP_UNDECIDED: return InconclusiveReason::kBrepUndecided;
+    case pb::PAIR_FAILED: return InconclusiveReason::kPairFailed;
+    default: return InconclusiveReason::kNone;
+  }
 }
 
 Verdict from_proto(pb::Verdict v) {

@@ -27,7 +27,9 @@ void to_proto(const p4::BendStep& step, pb::Step* out);
 void to_proto(const Vec3& v, pb::Vec3* out);
 void to_proto(const PartRecord& record, pb::PartInfo* out);
 pb::Verdict to_proto(Verdict v);
+pb::InconclusiveReason to_proto(InconclusiveReason r);
 Verdict from_proto(pb::Verdict v);
+InconclusiveReason from_proto(pb::InconclusiveReason r);
 
 // Scenes: a pose as stored (axis and angle kept as given), and a scene both ways.
 Result<StoredPose> to_stored_pose(const pb::Pose& in, const std::string& field);

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <functional>
 #include <map>
+#include <mutex>
+#include <optional>
 #include <tuple>
 
 namespace gk::server {
@@ -27,6 +29,20 @@ Result<Placed> place(const SceneObjectRecord& o, PartRegistry& parts) {
 }
 
 
+// A pair the kernel reported from the triangles alone, decided again where a CAD part's
+// tessellation cannot tell (engine/pair_verdict); nullopt when it is no contact after all.
+Result<std::optional<engine::PairVerdict>> redecide(const engine::PosedPart& a, const engine::PosedPart& b,
+                                                    double clearance_mm) {
+  engine::PairVerdictOptions options;
+  options.clearance_mm = clearance_mm;
+  options.mesh.distance_upper_bound_mm = clearance_mm;
+  auto v = engine::decide_pair(a, b, options);
+  if (!v.ok()) return v.error();
+  const VerdictResult& r = v.value().result;
+  if (r.verdict == Verdict::kClear && r.distance_mm >= clearance_mm) return std::optional<engine::PairVerdict>{};
+  return std::optional<engine::PairVerdict>{std::move(v).value()};
+}
+
 }  // namespace
 
 Result<PlacedScene> place_scene(const SceneRecord& scene, PartRegistry& parts) {
@@ -35,7 +51,8 @@ Result<PlacedScene> place_scene(const SceneRecord& scene, PartRegistry& parts) {
     auto p = place(o, parts);
     if (!p.ok()) return p.error();
     out.index_of[id] = static_cast<std::uint32_t>(out.objects.size());
-    out.objects.push_back({o.name, o.category, o.group, p.value().part->bvh, p.value().pose});
+    out.objects.push_back({o.name, o.category, o.group, p.value().part->bvh, p.value().pose, p.value().part->deflection_mm});
+    out.parts.push_back(p.value().part);
     out.records.push_back(&o);
     out.boxes.push_back(p.value().box);
   }
@@ -62,6 +79,7 @@ Result<MoveOutcome> DragSession::move(const std::string& scene_id, std::uint64_t
     session_ = std::move(session).value();
     ids_.clear();
     for (const SceneObjectRecord* r : placed.value().records) ids_.push_back(r->id);
+    parts_ = placed.value().parts;
     scene_id_ = scene.id;
     object_id_ = object_id;
     clearance_mm_ = clearance_mm;
@@ -70,9 +88,23 @@ Result<MoveOutcome> DragSession::move(const std::string& scene_id, std::uint64_t
   auto frame = session_->move_to(pose);
   if (!frame.ok()) return frame.error();
   MoveOutcome out;
-  out.verdict = frame.value().worst;
   out.candidates = frame.value().candidates;
-  for (const FrameContact& c : frame.value().contacts) out.contacts.push_back({ids_[c.other], c.verdict, c.distance_mm, c.point, c.other_point});
+  const std::shared_ptr<const LoadedPart>& self = parts_[session_->moving_index()];
+  for (const FrameContact& c : frame.value().contacts) {
+    const std::shared_ptr<const LoadedPart>& other = parts_[c.other];
+    ObjectContactResult contact{ids_[c.other], c.verdict, c.distance_mm, c.point, c.other_point};
+    if (self->deflection_mm + other->deflection_mm > 0.0) {
+      // The triangles of a CAD part cannot tell within its deflection: the exact faces decide.
+      auto exact = redecide({self.get(), pose}, {other.get(), session_->pose_of(c.other)}, clearance_mm);
+      if (!exact.ok()) return exact.error();
+      if (!exact.value()) continue;
+      const engine::PairVerdict& v = *exact.value();
+      contact = {ids_[c.other], v.result.verdict, v.result.distance_mm, v.result.point_a, v.result.point_b,
+                 v.result.inconclusive_reason, v.decided_on_brep};
+    }
+    if (severity(contact.verdict) > severity(out.verdict)) out.verdict = contact.verdict;
+    out.contacts.push_back(std::move(contact));
+  }
   return out;
 }
 
@@ -83,19 +115,22 @@ Result<MoveOutcome> object_contacts(const SceneRecord& scene, const std::string&
   if (self_it == scene.objects.end()) return Error{ErrorCode::kNotFound, "object_id", "no object '" + object_id + "'"};
   auto self = place(self_it->second, parts);
   if (!self.ok()) return self.error();
-  const Aabb reach = self.value().box.expanded(clearance_mm);
   MoveOutcome out;
   for (const auto& [id, other] : scene.objects) {
     if (id == object_id) continue;
     auto placed = place(other, parts);
     if (!placed.ok()) return placed.error();
-    if (!placed.value().box.overlaps(reach)) continue;
+    // Boxes of triangles: a CAD part's true surface may stand out of its tessellation's box.
+    const double deviation = self.value().part->deflection_mm + placed.value().part->deflection_mm;
+    if (!placed.value().box.overlaps(self.value().box.expanded(clearance_mm + deviation))) continue;
     ++out.candidates;
-    auto v = assess(*self.value().part->bvh, self.value().pose, *placed.value().part->bvh, placed.value().pose);
+    auto v = redecide({self.value().part.get(), self.value().pose}, {placed.value().part.get(), placed.value().pose},
+                      clearance_mm);
     if (!v.ok()) return v.error();
-    const VerdictResult& r = v.value();
-    if (r.verdict == Verdict::kClear && r.distance_mm >= clearance_mm) continue;
-    out.contacts.push_back({id, r.verdict, r.distance_mm, r.point_a, r.point_b});
+    if (!v.value()) continue;
+    const engine::PairVerdict& pv = *v.value();
+    const VerdictResult& r = pv.result;
+    out.contacts.push_back({id, r.verdict, r.distance_mm, r.point_a, r.point_b, r.inconclusive_reason, pv.decided_on_brep});
     if (severity(r.verdict) > severity(out.verdict)) out.verdict = r.verdict;
   }
   return out;
@@ -150,7 +185,7 @@ void AuditJob::run(PartRegistry& parts, std::function<void(const AuditSnapshot&)
   auto to_record = [&](const PairClash& c) {
     const SceneObjectRecord& a = *records[c.a];
     const SceneObjectRecord& b = *records[c.b];
-    return ClashRecord{a.id, b.id, a.name, b.name, a.category, b.category, c};
+    return ClashRecord{a.id, b.id, a.name, b.name, a.category, b.category, c, false, ""};
   };
   AuditOptions options = options_;
   options.cancel = &cancelled_;
@@ -163,9 +198,46 @@ void AuditJob::run(PartRegistry& parts, std::function<void(const AuditSnapshot&)
       s.eta_s = p.eta_s;
     });
   };
-  options.on_clash = [&](const PairClash& c) {
+  // A clash with a CAD part within its deflection is decided again on the exact faces as it is
+  // found (serialised with the other reports); the final list uses the same answers.
+  const std::vector<std::shared_ptr<const LoadedPart>>& parts_of = placed.value().parts;
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::optional<ClashRecord>> redecided;
+  std::mutex redecided_mutex;
+  auto final_record = [&](const PairClash& c) -> std::optional<ClashRecord> {
     ClashRecord r = to_record(c);
-    update([&](AuditSnapshot& s) { s.clashes.push_back(std::move(r)); });
+    if (parts_of[c.a]->deflection_mm + parts_of[c.b]->deflection_mm == 0.0) return r;
+    {
+      std::lock_guard<std::mutex> lock(redecided_mutex);
+      auto it = redecided.find({c.a, c.b});
+      if (it != redecided.end()) return it->second;
+    }
+    auto exact = redecide({parts_of[c.a].get(), objects[c.a].pose}, {parts_of[c.b].get(), objects[c.b].pose},
+                          options_.clearance_mm);
+    std::optional<ClashRecord> out;
+    if (!exact.ok()) {
+      r.clash.verdict = Verdict::kInconclusive;
+      r.clash.inconclusive_reason = InconclusiveReason::kPairFailed;
+      r.reason = exact.error().to_string();
+      out = r;
+    } else if (exact.value()) {
+      const engine::PairVerdict& v = *exact.value();
+      r.clash.verdict = v.result.verdict;
+      r.clash.inconclusive_reason = v.result.inconclusive_reason;
+      r.clash.distance_mm = v.result.distance_mm;
+      r.clash.point_a = v.result.point_a;
+      r.clash.point_b = v.result.point_b;
+      r.clash.clearance_violation = v.result.verdict == Verdict::kClear;
+      r.decided_on_brep = v.decided_on_brep;
+      r.reason = v.result.reason;
+      out = r;
+    }
+    std::lock_guard<std::mutex> lock(redecided_mutex);
+    redecided[{c.a, c.b}] = out;
+    return out;
+  };
+  options.on_clash = [&](const PairClash& c) {
+    std::optional<ClashRecord> r = final_record(c);
+    if (r) update([&](AuditSnapshot& s) { s.clashes.push_back(std::move(*r)); });
   };
   Result<AuditResult> result = Error{};
   if (baseline_) {
@@ -200,7 +272,8 @@ void AuditJob::run(PartRegistry& parts, std::function<void(const AuditSnapshot&)
   if (!result.ok()) return fail(result.error());
   const AuditResult& r = result.value();
   std::vector<ClashRecord> ordered;
-  for (const PairClash& c : r.clashes) ordered.push_back(to_record(c));
+  for (const PairClash& c : r.clashes)
+    if (std::optional<ClashRecord> record = final_record(c)) ordered.push_back(std::move(*record));
   end([&](AuditSnapshot& s) {
     s.clashes = std::move(ordered);
     s.pairs_done = r.pairs_done;

@@ -2,6 +2,7 @@
 // move of a drag), and the interference audit of every pair, as a cancellable job with progress.
 #pragma once
 
+#include "engine/pair_verdict.h"
 #include "kernel/contact_verdict.h"
 #include "kernel/layout_session.h"
 #include "kernel/scene_audit.h"
@@ -25,6 +26,8 @@ struct ObjectContactResult {
   Verdict verdict = Verdict::kClear;
   double distance_mm = 0.0;
   Vec3 point = Vec3::Zero(), other_point = Vec3::Zero();
+  InconclusiveReason inconclusive_reason = InconclusiveReason::kNone;
+  bool decided_on_brep = false;
 };
 
 struct MoveOutcome {
@@ -37,6 +40,7 @@ struct MoveOutcome {
 // copy (instancing), each at its pose.
 struct PlacedScene {
   std::vector<AuditObject> objects;
+  std::vector<std::shared_ptr<const LoadedPart>> parts;  // each object's part (its exact B-Rep for CAD)
   std::vector<const SceneObjectRecord*> records;  // into the SceneRecord it was placed from
   std::vector<Aabb> boxes;
   std::map<std::string, std::uint32_t> index_of;
@@ -56,6 +60,7 @@ class DragSession {
 
  private:
   std::unique_ptr<LayoutSession> session_;
+  std::vector<std::shared_ptr<const LoadedPart>> parts_;  // object index -> part
   std::vector<std::string> ids_;  // object index -> id
   std::string scene_id_, object_id_;
   double clearance_mm_ = -1.0;
@@ -72,6 +77,8 @@ struct ClashRecord {
   std::string a, b;  // object ids, a < b
   std::string name_a, name_b, category_a, category_b;
   PairClash clash;   // a/b there are indices into the audited object list
+  bool decided_on_brep = false;  // a CAD part within its deflection: decided on the exact faces
+  std::string reason;            // what decided it (exact faces), or why it is INCONCLUSIVE
 };
 
 // An audited object as the report shows it.

@@ -131,6 +131,8 @@ grpc::Status GatekeeperService::contacts(const std::string& scene_id, const std:
     o->set_distance_mm(c.distance_mm);
     to_proto(c.point, o->mutable_point());
     to_proto(c.other_point, o->mutable_other_point());
+    o->set_inconclusive_reason(to_proto(c.inconclusive_reason));
+    o->set_decided_on_brep(c.decided_on_brep);
   }
   response->set_elapsed_us(us_since(t0));
   return grpc::Status::OK;

@@ -308,7 +308,7 @@ TEST(GatekeeperdE2E, ClearanceQueryMatchesTheKernelAndRefusesOverload) {
   const RigidTransform pose_nut = RigidTransform::from_translation(Vec3(shift, 0, 0));
   const double exact_d = occt::exact_distance(shape, occt::place(shape, pose_nut).value()).value().distance_mm;
   EXPECT_NEAR(refined.distance_mm(), exact_d, 1e-6);
-  EXPECT_LE(refined.error_bound_mm(), 1e-6);
+  EXPECT_LE(refined.error_bound_mm(), 1e-6 + 1e-9);  // OCCT's precision plus rounding
   // Unknown part and NaN pose.
   req.mutable_a()->set_part_id(std::string(64, 'b'));
   grpc::ClientContext ctx2;

@@ -1,0 +1,226 @@
+#include "occt_adapters/brep_contact.h"
+
+#include "occt_adapters/occt_errors.h"
+#include "occt_adapters/shape_builders.h"
+#include "occt_adapters/shape_impl.h"
+
+#include <BRepAlgoAPI_Common.hxx>
+#include <BRepBuilderAPI_MakeFace.hxx>
+#include <BRepBuilderAPI_MakePolygon.hxx>
+#include <BRepClass3d_SolidClassifier.hxx>
+#include <BRepExtrema_DistShapeShape.hxx>
+#include <BRepGProp.hxx>
+#include <BRep_Builder.hxx>
+#include <BRep_Tool.hxx>
+#include <GProp_GProps.hxx>
+#include <TopExp.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Compound.hxx>
+
+#include <cmath>
+#include <limits>
+
+namespace gk::occt {
+namespace {
+
+// The pose followed by the shift that brings frame_origin to the origin.
+RigidTransform in_local_frame(const RigidTransform& pose, const Vec3& frame_origin) {
+  RigidTransform local = pose;
+  local.translation = pose.translation - frame_origin;
+  return local;
+}
+
+Vec3 vec(const gp_Pnt& p) { return Vec3(p.X(), p.Y(), p.Z()); }
+
+struct Measured {
+  double distance = std::numeric_limits<double>::infinity();
+  Vec3 a = Vec3::Zero(), b = Vec3::Zero();  // local frame
+  int face_a = 0, face_b = 0;
+};
+
+// BRepExtrema between two (sub)shapes; false when it found no solution.
+bool measure(const TopoDS_Shape& a, const TopoDS_Shape& b, Measured& out) {
+  BRepExtrema_DistShapeShape dist(a, b);
+  if (!dist.IsDone() || dist.NbSolution() < 1) return false;
+  out.distance = dist.Value();
+  out.a = vec(dist.PointOnShape1(1));
+  out.b = vec(dist.PointOnShape2(1));
+  return true;
+}
+
+// Is the point strictly inside one of the shape's solids (beyond tolerance_mm from its boundary)?
+bool inside_a_solid(const TopoDS_Shape& shape, const gp_Pnt& p, double tolerance_mm) {
+  for (TopExp_Explorer e(shape, TopAbs_SOLID); e.More(); e.Next()) {
+    BRepClass3d_SolidClassifier classifier(e.Current());
+    classifier.Perform(p, tolerance_mm);
+    if (classifier.State() == TopAbs_IN) return true;
+  }
+  return false;
+}
+
+// A point on each solid's boundary (its first vertex), local frame.
+std::vector<gp_Pnt> one_point_per_solid(const TopoDS_Shape& shape) {
+  std::vector<gp_Pnt> out;
+  for (TopExp_Explorer s(shape, TopAbs_SOLID); s.More(); s.Next()) {
+    TopExp_Explorer v(s.Current(), TopAbs_VERTEX);
+    if (v.More()) out.push_back(BRep_Tool::Pnt(TopoDS::Vertex(v.Current())));
+  }
+  return out;
+}
+
+// Total volume of the solids in a Boolean result (faces or edges left by a touching contact
+// carry no volume and must not be integrated as if they closed one).
+double solid_volume(const TopoDS_Shape& shape) {
+  double total = 0.0;
+  for (TopExp_Explorer e(shape, TopAbs_SOLID); e.More(); e.Next()) {
+    GProp_GProps props;
+    BRepGProp::VolumeProperties(e.Current(), props);
+    total += std::fabs(props.Mass());
+  }
+  return total;
+}
+
+}  // namespace
+
+Result<BrepContact> decide_brep_contact(const Shape& a, const RigidTransform& pose_a, const Shape& b,
+                                        const RigidTransform& pose_b, const Vec3& frame_origin,
+                                        const std::vector<std::pair<int, int>>& face_pairs, double touch_mm,
+                                        double overlap_volume_mm3) {
+  if (a.is_null()) return invalid_argument("a", "is empty");
+  if (b.is_null()) return invalid_argument("b", "is empty");
+  if (!frame_origin.allFinite()) return invalid_argument("frame_origin", "must be finite");
+  auto placed_a = place(a, in_local_frame(pose_a, frame_origin));
+  if (!placed_a.ok()) return placed_a.error();
+  auto placed_b = place(b, in_local_frame(pose_b, frame_origin));
+  if (!placed_b.ok()) return placed_b.error();
+  const TopoDS_Shape& sa = placed_a.value().impl().shape;
+  const TopoDS_Shape& sb = placed_b.value().impl().shape;
+
+  BrepContact out;
+  std::string failure;
+  auto ran = guarded("shapes", "deciding the contact on the B-Rep", [&] {
+    Measured best;
+    if (face_pairs.empty()) {
+      if (!measure(sa, sb, best)) return void(failure = "BRepExtrema_DistShapeShape found no solution");
+    } else {
+      TopTools_IndexedMapOfShape faces_a, faces_b;
+      TopExp::MapShapes(sa, TopAbs_FACE, faces_a);
+      TopExp::MapShapes(sb, TopAbs_FACE, faces_b);
+      for (const auto& [fa, fb] : face_pairs) {
+        if (fa < 1 || fa > faces_a.Extent() || fb < 1 || fb > faces_b.Extent())
+          return void(failure = "face pair (" + std::to_string(fa) + ", " + std::to_string(fb) + ") is not in the shapes");
+        Measured m;
+        if (!measure(faces_a(fa), faces_b(fb), m)) return void(failure = "BRepExtrema found no solution for a face pair");
+        if (m.distance < best.distance) best = {m.distance, m.a, m.b, fa, fb};
+      }
+    }
+    out.point_a = best.a + frame_origin;
+    out.point_b = best.b + frame_origin;
+    out.face_a = best.face_a;
+    out.face_b = best.face_b;
+    if (best.distance > touch_mm) {
+      // Boundaries apart: disjoint, unless one solid lies inside the other.
+      for (const gp_Pnt& p : one_point_per_solid(sa))
+        if (inside_a_solid(sb, p, touch_mm)) {
+          out.nested = true;
+          out.point_a = out.point_b = vec(p) + frame_origin;
+        }
+      for (const gp_Pnt& p : one_point_per_solid(sb))
+        if (!out.nested && inside_a_solid(sa, p, touch_mm)) {
+          out.nested = true;
+          out.point_a = out.point_b = vec(p) + frame_origin;
+        }
+      out.relation = out.nested ? BrepRelation::kOverlapping : BrepRelation::kApart;
+      out.distance_mm = out.nested ? 0.0 : best.distance;
+      return;
+    }
+    // Boundaries meet: a shared volume means they cross.
+    BRepAlgoAPI_Common common(sa, sb);
+    out.used_boolean = true;
+    if (!common.IsDone() || common.HasErrors()) return void(failure = "BRepAlgoAPI_Common failed");
+    out.shared_volume_mm3 = solid_volume(common.Shape());
+    out.relation = out.shared_volume_mm3 > overlap_volume_mm3 ? BrepRelation::kOverlapping : BrepRelation::kTouching;
+    out.distance_mm = 0.0;
+  });
+  if (!ran.ok()) return ran.error();
+  if (!failure.empty()) return Error{ErrorCode::kInternal, "shapes", failure};
+  return out;
+}
+
+Result<double> shared_volume(const Shape& a, const RigidTransform& pose_a, const Shape& b, const RigidTransform& pose_b,
+                             const Vec3& frame_origin) {
+  if (a.is_null()) return invalid_argument("a", "is empty");
+  if (b.is_null()) return invalid_argument("b", "is empty");
+  auto placed_a = place(a, in_local_frame(pose_a, frame_origin));
+  if (!placed_a.ok()) return placed_a.error();
+  auto placed_b = place(b, in_local_frame(pose_b, frame_origin));
+  if (!placed_b.ok()) return placed_b.error();
+  double volume = 0.0;
+  bool failed = false;
+  auto ran = guarded("shapes", "Boolean common", [&] {
+    BRepAlgoAPI_Common common(placed_a.value().impl().shape, placed_b.value().impl().shape);
+    if (!common.IsDone() || common.HasErrors()) return void(failed = true);
+    volume = solid_volume(common.Shape());
+  });
+  if (!ran.ok()) return ran.error();
+  if (failed) return Error{ErrorCode::kInternal, "shapes", "BRepAlgoAPI_Common failed"};
+  return volume;
+}
+
+Result<int> first_point_inside(const Shape& shape, const RigidTransform& pose, const std::vector<Vec3>& points,
+                               const Vec3& frame_origin, double tolerance_mm) {
+  if (shape.is_null()) return invalid_argument("shape", "is empty");
+  auto placed = place(shape, in_local_frame(pose, frame_origin));
+  if (!placed.ok()) return placed.error();
+  int found = -1;
+  auto ran = guarded("points", "classifying points against a solid", [&] {
+    for (std::size_t i = 0; i < points.size() && found < 0; ++i) {
+      const Vec3 p = points[i] - frame_origin;
+      if (inside_a_solid(placed.value().impl().shape, gp_Pnt(p.x(), p.y(), p.z()), tolerance_mm)) found = static_cast<int>(i);
+    }
+  });
+  if (!ran.ok()) return ran.error();
+  return found;
+}
+
+Result<TriangleSetDistance> distance_to_triangles(const Shape& shape, const RigidTransform& pose,
+                                                  const std::vector<Triangle>& triangles, const Vec3& frame_origin) {
+  if (shape.is_null()) return invalid_argument("shape", "is empty");
+  if (triangles.empty()) return invalid_argument("triangles", "is empty");
+  auto placed = place(shape, in_local_frame(pose, frame_origin));
+  if (!placed.ok()) return placed.error();
+  TriangleSetDistance out;
+  std::string failure;
+  auto ran = guarded("triangles", "measuring a shape against triangles", [&] {
+    TopoDS_Compound patch;
+    BRep_Builder builder;
+    builder.MakeCompound(patch);
+    for (const Triangle& t : triangles) {
+      BRepBuilderAPI_MakePolygon polygon;
+      for (const Vec3& v : t) {
+        const Vec3 p = v - frame_origin;
+        polygon.Add(gp_Pnt(p.x(), p.y(), p.z()));
+      }
+      polygon.Close();
+      if (!polygon.IsDone()) continue;  // a zero-length edge: its points are on the neighbours' edges
+      BRepBuilderAPI_MakeFace face(polygon.Wire(), true);
+      if (face.IsDone()) builder.Add(patch, face.Face());
+      else builder.Add(patch, polygon.Wire());  // a sliver: its edges still count
+    }
+    TopTools_IndexedMapOfShape faces;
+    TopExp::MapShapes(placed.value().impl().shape, TopAbs_FACE, faces);
+    BRepExtrema_DistShapeShape dist(placed.value().impl().shape, patch);
+    if (!dist.IsDone() || dist.NbSolution() < 1) return void(failure = "BRepExtrema_DistShapeShape found no solution");
+    out.distance_mm = dist.Value();
+    out.point_shape = vec(dist.PointOnShape1(1)) + frame_origin;
+    out.point_triangles = vec(dist.PointOnShape2(1)) + frame_origin;
+    if (dist.SupportTypeShape1(1) == BRepExtrema_IsInFace) out.face = faces.FindIndex(dist.SupportOnShape1(1));
+  });
+  if (!ran.ok()) return ran.error();
+  if (!failure.empty()) return Error{ErrorCode::kInternal, "triangles", failure};
+  return out;
+}
+
+}  // namespace gk::occt

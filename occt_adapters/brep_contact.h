@@ -1,0 +1,63 @@
+// Two posed B-Rep solids decided on their exact faces: apart (by how much), touching, or
+// overlapping. The tessellation only says where to look; this is the answer when the mesh is too
+// coarse to tell (its distance within the deflections).
+//
+// Everything runs in a local frame: both shapes are moved so that `frame_origin` (a world point near
+// the contact) becomes the origin. OCCT's Booleans and classifiers use absolute tolerances
+// (1e-7 mm) that lose their meaning on coordinates of 5e4 mm, where a double's spacing is 7e-12 mm
+// and the algorithms' internal arithmetic far coarser: a Boolean common that is right at the origin
+// comes back empty at factory coordinates.
+#pragma once
+
+#include "kernel/geometry_types.h"
+#include "kernel/rigid_transform.h"
+#include "kernel/status.h"
+#include "occt_adapters/shape.h"
+
+#include <utility>
+#include <vector>
+
+namespace gk::occt {
+
+enum class BrepRelation { kApart, kTouching, kOverlapping };
+
+struct BrepContact {
+  BrepRelation relation = BrepRelation::kApart;
+  double distance_mm = 0.0;         // between the boundaries; 0 unless apart
+  Vec3 point_a = Vec3::Zero();      // world witnesses (apart), or a point of the contact or overlap
+  Vec3 point_b = Vec3::Zero();
+  int face_a = 0, face_b = 0;       // 1-based faces of the witnesses (0: not a face pair)
+  double shared_volume_mm3 = 0.0;   // the Boolean common's volume, when it ran
+  bool nested = false;              // overlapping with boundaries apart: one lies inside the other
+  bool used_boolean = false;
+};
+
+// The two shapes at their poses. `face_pairs` (1-based, a's then b's) restricts the distance to the
+// pairs that can hold the minimum; empty: all faces. Boundaries closer than touch_mm are touching or
+// crossing, told apart by a Boolean common with a volume above overlap_volume_mm3.
+Result<BrepContact> decide_brep_contact(const Shape& a, const RigidTransform& pose_a, const Shape& b,
+                                        const RigidTransform& pose_b, const Vec3& frame_origin,
+                                        const std::vector<std::pair<int, int>>& face_pairs, double touch_mm,
+                                        double overlap_volume_mm3);
+
+// The volume the two solids share at their poses (Boolean common in the local frame) [mm^3].
+Result<double> shared_volume(const Shape& a, const RigidTransform& pose_a, const Shape& b, const RigidTransform& pose_b,
+                             const Vec3& frame_origin);
+
+// The first of the world points lying strictly inside a solid of the shape at its pose (farther in
+// than tolerance_mm), or -1. A point on a body's exact surface found inside the other solid proves
+// the two overlap.
+Result<int> first_point_inside(const Shape& shape, const RigidTransform& pose, const std::vector<Vec3>& points,
+                               const Vec3& frame_origin, double tolerance_mm);
+
+// The distance from the shape at its pose to a set of world triangles (a mesh's patch near it),
+// measured on the exact faces; witnesses in world coordinates.
+struct TriangleSetDistance {
+  double distance_mm = 0.0;
+  Vec3 point_shape = Vec3::Zero(), point_triangles = Vec3::Zero();
+  int face = 0;  // 1-based face of the shape's witness
+};
+Result<TriangleSetDistance> distance_to_triangles(const Shape& shape, const RigidTransform& pose,
+                                                  const std::vector<Triangle>& triangles, const Vec3& frame_origin);
+
+}  // namespace gk::occt
