@@ -1,8 +1,12 @@
 // The volume two closed meshes share, by ray casting: vertical rays on a grid over the overlap of
 // their boxes; along each ray the intervals inside A and inside B (from the sorted crossings of
-// each closed surface) are intersected and their length summed. The midpoint rule's error shrinks
-// with the grid; the result states its grid so a caller can tighten it. Exact B-Rep volumes come
-// from occt_adapters (Boolean common).
+// each closed surface) are intersected and their length summed.
+//
+// The error is bounded, not estimated: in a cell that no triangle edge crosses (projected on the
+// grid's plane) the overlap length is linear, so the centre ray gives the cell's volume exactly; a
+// cell crossed by an edge can err by at most its area times the overlap's height. The grid is
+// refined (up to about a million rays) until that bound is within 1 % of the volume. Exact B-Rep
+// volumes come from occt_adapters (Boolean common).
 #pragma once
 
 #include "kernel/mesh_bvh.h"
@@ -13,11 +17,12 @@ namespace gk {
 
 struct VolumeEstimate {
   double volume_mm3 = 0.0;
+  double error_bound_mm3 = 0.0;  // |volume_mm3 - true shared volume| <= this
   double cell_mm = 0.0;   // grid spacing used (the larger of the two cell sides)
   int rays = 0;
 };
 
-// Both meshes must be closed and consistently oriented; cells_per_axis in [4, 4096].
+// Both meshes must be closed and consistently oriented; cells_per_axis in [4, 4096]: the first grid.
 Result<VolumeEstimate> interference_volume(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
                                            const RigidTransform& pose_b, int cells_per_axis = 256);
 

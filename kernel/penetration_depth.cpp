@@ -1,11 +1,15 @@
 #include "kernel/penetration_depth.h"
 
 #include "kernel/convex_decomposition.h"
+#include "kernel/contact_verdict.h"
 #include "kernel/convexity.h"
 #include "kernel/mesh_collision.h"
 #include "kernel/mesh_distance.h"
 
+#include <algorithm>
 #include <cmath>
+#include <optional>
+#include <vector>
 
 namespace gk {
 namespace {
@@ -114,6 +118,130 @@ Result<DepthAlong> advance_back(const MeshBvh& a, const RigidTransform& pose_a, 
   return Error{ErrorCode::kInternal, "direction", "advancement did not converge"};
 }
 
+// The translations t in [0, t_max] at which triangle ta touches or crosses tb + t u (both in A's
+// frame), by the separating-axis theorem: on each candidate axis the projections must overlap,
+// a linear condition in t. False when no t qualifies. Rounding is covered by `slack` [mm].
+bool meeting_interval(const Triangle& ta, const Triangle& tb, const Vec3& u, double t_max, double slack, double& lo, double& hi) {
+  const Vec3 ea[3] = {ta[1] - ta[0], ta[2] - ta[1], ta[0] - ta[2]};
+  const Vec3 eb[3] = {tb[1] - tb[0], tb[2] - tb[1], tb[0] - tb[2]};
+  const Vec3 na = ea[0].cross(ea[1]), nb = eb[0].cross(eb[1]);
+  Vec3 axes[17];
+  int n = 0;
+  axes[n++] = na;
+  axes[n++] = nb;
+  for (const Vec3& x : ea)
+    for (const Vec3& y : eb) axes[n++] = x.cross(y);
+  for (const Vec3& x : ea) axes[n++] = na.cross(x);  // in-plane normals: coplanar triangles
+  for (const Vec3& y : eb) axes[n++] = nb.cross(y);
+  lo = 0.0;
+  hi = t_max;
+  for (int i = 0; i < n; ++i) {
+    const double len = axes[i].norm();
+    if (!(len > 1e-300)) continue;
+    const Vec3 axis = axes[i] / len;
+    double a0 = axis.dot(ta[0]), a1 = a0, b0 = axis.dot(tb[0]), b1 = b0;
+    for (int k = 1; k < 3; ++k) {
+      a0 = std::min(a0, axis.dot(ta[k]));
+      a1 = std::max(a1, axis.dot(ta[k]));
+      b0 = std::min(b0, axis.dot(tb[k]));
+      b1 = std::max(b1, axis.dot(tb[k]));
+    }
+    // Overlap of [a0, a1] and [b0 + t k, b1 + t k]: a0 - b1 - slack <= t k <= a1 - b0 + slack.
+    const double k = axis.dot(u);
+    const double from = a0 - b1 - slack, to = a1 - b0 + slack;
+    if (std::fabs(k) < 1e-15) {
+      if (from > 0.0 || to < 0.0) return false;
+      continue;
+    }
+    double t0 = from / k, t1 = to / k;
+    if (t0 > t1) std::swap(t0, t1);
+    lo = std::max(lo, t0);
+    hi = std::min(hi, t1);
+    if (lo > hi) return false;
+  }
+  return true;
+}
+
+// Every translation in [0, t_max] at which B's surface meets A's, as intervals (unsorted), by a
+// dual traversal with B's node boxes swept along u. False when more than max_pairs pairs qualify.
+bool meeting_intervals(const MeshBvh& a, const MeshBvh& b, const RigidTransform& b_in_a, const Vec3& u, double t_max,
+                       std::size_t max_pairs, std::vector<std::pair<double, double>>& out) {
+  const MeshBvh::NodeView na = a.nodes(), nb = b.nodes();
+  const Mat3 abs_r = b_in_a.rotation.cwiseAbs();
+  const double slack = 1e-9 * std::max({a.root_bounds().max.cwiseAbs().maxCoeff(), a.root_bounds().min.cwiseAbs().maxCoeff(),
+                                        b_in_a.translation.norm() + b.root_bounds().max.cwiseAbs().maxCoeff() +
+                                            b.root_bounds().min.cwiseAbs().maxCoeff() + t_max, 1.0});
+  const Vec3 sweep = t_max * u;
+  std::vector<std::pair<int, int>> stack = {{0, 0}};
+  std::size_t pairs = 0;
+  while (!stack.empty()) {
+    const auto [ia, ib] = stack.back();
+    stack.pop_back();
+    // B's node box in A's frame, swept from t = 0 to t_max.
+    const Vec3 cb = b_in_a.apply(b.node_center(ib));
+    const Vec3 hb = abs_r * b.node_half_extent(ib);
+    const Vec3 lo_b = cb - hb + sweep.cwiseMin(Vec3::Zero()) - Vec3::Constant(slack);
+    const Vec3 hi_b = cb + hb + sweep.cwiseMax(Vec3::Zero()) + Vec3::Constant(slack);
+    const Vec3 lo_a(na.min_point[ia].x(), na.min_point[ia].y(), na.min_point[ia].z());
+    const Vec3 hi_a(na.max_point[ia].x(), na.max_point[ia].y(), na.max_point[ia].z());
+    if ((lo_a.array() > hi_b.array()).any() || (lo_b.array() > hi_a.array()).any()) continue;
+    const bool leaf_a = na.info[ia].x() != 0, leaf_b = nb.info[ib].x() != 0;
+    if (leaf_a && leaf_b) {
+      for (int ka = na.info[ia].y(); ka <= na.info[ia].z(); ++ka)
+        for (int kb = nb.info[ib].y(); kb <= nb.info[ib].z(); ++kb) {
+          if (++pairs > max_pairs) return false;
+          const Triangle& ta = a.ordered_triangle(ka);
+          const Triangle& tl = b.ordered_triangle(kb);
+          const Triangle tb = {b_in_a.apply(tl[0]), b_in_a.apply(tl[1]), b_in_a.apply(tl[2])};
+          double lo = 0.0, hi = 0.0;
+          if (meeting_interval(ta, tb, u, t_max, slack, lo, hi)) out.emplace_back(lo, hi);
+        }
+      continue;
+    }
+    const bool split_a = !leaf_a && (leaf_b || a.node_half_extent(ia).squaredNorm() >= b.node_half_extent(ib).squaredNorm());
+    if (split_a) {
+      stack.push_back({na.info[ia].y(), ib});
+      stack.push_back({na.info[ia].z(), ib});
+    } else {
+      stack.push_back({ia, nb.info[ib].y()});
+      stack.push_back({ia, nb.info[ib].z()});
+    }
+  }
+  return true;
+}
+
+// The first translation along u at which B is free of A (its surface apart from or touching A's,
+// and not inside it): the end of the first stretch of meeting translations after which B is not
+// contained. Each candidate is confirmed by the exact verdict; nullopt when none is confirmed
+// below `last` (the last exit, free by construction) or there are too many pairs to list.
+std::optional<double> first_free_translation(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
+                                             const RigidTransform& pose_b, const Vec3& u, double last, double tolerance_mm) {
+  const RigidTransform b_in_a = relative_transform(pose_a, pose_b);
+  const Vec3 u_in_a = pose_a.rotation.transpose() * u;
+  std::vector<std::pair<double, double>> intervals;
+  if (!meeting_intervals(a, b, b_in_a, u_in_a, last, 4000000, intervals)) return std::nullopt;
+  std::sort(intervals.begin(), intervals.end());
+  auto free_at = [&](double t) {
+    RigidTransform moved = pose_b;
+    moved.translation += t * u;
+    auto v = assess(a, pose_a, b, moved);
+    return v.ok() && (v.value().verdict == Verdict::kClear || v.value().verdict == Verdict::kTouching);
+  };
+  // Walk the union of the intervals from t = 0; each gap's start is a candidate.
+  double reach = 0.0;  // the union covers [.., reach]
+  std::size_t i = 0;
+  while (i < intervals.size() && intervals[i].first <= reach) reach = std::max(reach, intervals[i++].second);
+  while (reach < last) {
+    const double gap_end = i < intervals.size() ? intervals[i].first : last;
+    const double candidate = std::min(reach + tolerance_mm, last);
+    if (candidate < gap_end && free_at(0.5 * (reach + gap_end)) && free_at(candidate)) return candidate;
+    if (i >= intervals.size()) break;
+    reach = std::max(reach, intervals[i].second);
+    while (i < intervals.size() && intervals[i].first <= reach) reach = std::max(reach, intervals[i++].second);
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 Result<DepthAlong> penetration_along(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
@@ -123,7 +251,17 @@ Result<DepthAlong> penetration_along(const MeshBvh& a, const RigidTransform& pos
   auto free = already_free(a, pose_a, b, pose_b);
   if (!free.ok()) return free.error();
   if (free.value()) return DepthAlong{};
-  return advance_back(a, pose_a, b, pose_b, direction.normalized(), tolerance_mm);
+  // The last exit is free (everything beyond it is); a free stretch may come earlier (B leaving
+  // through a cavity of A): the first free position is what "how far B must move" means.
+  const Vec3 u = direction.normalized();
+  auto last = advance_back(a, pose_a, b, pose_b, u, tolerance_mm);
+  if (!last.ok()) return last;
+  DepthAlong out = last.value();
+  out.last_exit_mm = out.depth_mm;
+  if (const std::optional<double> first = first_free_translation(a, pose_a, b, pose_b, u, out.depth_mm, tolerance_mm)) {
+    out.depth_mm = std::min(out.depth_mm, *first);
+  }
+  return out;
 }
 
 Result<DepthVector> penetration_vector(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,

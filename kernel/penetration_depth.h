@@ -22,7 +22,10 @@
 namespace gk {
 
 struct DepthAlong {
-  double depth_mm = 0.0;  // 0 when B is already free of A
+  // The first translation along the direction at which B is free of A (touching at most, checked
+  // by the exact verdict); 0 when B is already free.
+  double depth_mm = 0.0;
+  double last_exit_mm = 0.0;  // beyond this B stays free (equal to depth_mm unless B leaves through a cavity)
   int steps = 0;
 };
 

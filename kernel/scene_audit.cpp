@@ -95,7 +95,10 @@ bool audit_pair(const AuditObject& oa, const AuditObject& ob, const AuditOptions
   if (options.compute_volume && r.verdict == Verdict::kCollision && oa.mesh->mesh().is_closed_oriented() &&
       ob.mesh->mesh().is_closed_oriented()) {
     auto volume = interference_volume(*oa.mesh, oa.pose, *ob.mesh, ob.pose, kAuditVolumeRaysPerAxis);
-    if (volume.ok()) out.volume_mm3 = volume.value().volume_mm3;
+    if (volume.ok()) {
+      out.volume_mm3 = volume.value().volume_mm3;
+      out.volume_error_bound_mm3 = volume.value().error_bound_mm3;
+    }
   }
   return true;
 }

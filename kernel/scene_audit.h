@@ -66,6 +66,7 @@ struct PairClash {
   double depth_mm = -1.0;      // on request, for collisions: certified upper bound (kernel/penetration_depth)
   Vec3 depth_direction = Vec3::Zero();
   double volume_mm3 = -1.0;    // on request, for collisions of closed meshes: ray-cast shared volume
+  double volume_error_bound_mm3 = -1.0;  // |volume_mm3 - true volume| <= this
   std::string error;           // the pair could not be decided (then verdict INCONCLUSIVE)
 };
 

@@ -149,6 +149,9 @@ Result<RawMesh> read_ply(std::string_view bytes) {
   BinaryCursor binary(bytes.substr(scanner.offset()), format == "binary_big_endian");
   std::vector<double> values;
   std::vector<std::vector<double>> lists;
+  // PLY allows any element order: faces may come before the vertices they index.
+  for (const Element& e : elements)
+    if (e.name == "vertex") vertex_count = e.count;
   for (const Element& e : elements) {
     const bool is_vertex = e.name == "vertex", is_face = e.name == "face";
     int ix = -1, iy = -1, iz = -1, iface = -1;
@@ -163,7 +166,6 @@ Result<RawMesh> read_ply(std::string_view bytes) {
     }
     if (is_vertex && (ix < 0 || iy < 0 || iz < 0)) return invalid_argument("element vertex", "needs x, y and z properties");
     if (is_face && iface < 0) return invalid_argument("element face", "needs a vertex_indices list");
-    if (is_vertex) vertex_count = e.count;
     const std::string where = "element " + e.name + "[";
     for (long long item = 0; item < e.count; ++item) {
       values.assign(e.properties.size(), 0.0);

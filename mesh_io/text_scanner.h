@@ -5,6 +5,7 @@
 #include "kernel/status.h"
 
 #include <charconv>
+#include <cstdlib>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -57,7 +58,15 @@ inline bool parse_double(std::string_view word, double& out) {
   }
   if (word.empty()) return false;
   const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), out);
-  return ec == std::errc() && end == word.data() + word.size() && std::isfinite(out);
+  if (end != word.data() + word.size()) return false;
+  if (ec == std::errc::result_out_of_range) {
+    // Too small for a double (1e-400) rounds to a subnormal or zero, as strtod rounds it (this
+    // process never sets a locale, so strtod reads '.' as the point); too large is refused.
+    const std::string copy(word);
+    out = std::strtod(copy.c_str(), nullptr);
+    return std::isfinite(out) && std::fabs(out) < 1.0;
+  }
+  return ec == std::errc() && std::isfinite(out);
 }
 
 inline bool parse_integer(std::string_view word, long long& out) {

@@ -149,24 +149,30 @@ Result<BrepContact> decide_brep_contact(const Shape& a, const RigidTransform& po
   return out;
 }
 
-Result<double> shared_volume(const Shape& a, const RigidTransform& pose_a, const Shape& b, const RigidTransform& pose_b,
-                             const Vec3& frame_origin) {
+Result<SharedVolume> shared_volume(const Shape& a, const RigidTransform& pose_a, const Shape& b, const RigidTransform& pose_b,
+                                   const Vec3& frame_origin) {
   if (a.is_null()) return invalid_argument("a", "is empty");
   if (b.is_null()) return invalid_argument("b", "is empty");
   auto placed_a = place(a, in_local_frame(pose_a, frame_origin));
   if (!placed_a.ok()) return placed_a.error();
   auto placed_b = place(b, in_local_frame(pose_b, frame_origin));
   if (!placed_b.ok()) return placed_b.error();
-  double volume = 0.0;
+  SharedVolume out;
   bool failed = false;
   auto ran = guarded("shapes", "Boolean common", [&] {
     BRepAlgoAPI_Common common(placed_a.value().impl().shape, placed_b.value().impl().shape);
     if (!common.IsDone() || common.HasErrors()) return void(failed = true);
-    volume = solid_volume(common.Shape());
+    for (TopExp_Explorer e(common.Shape(), TopAbs_SOLID); e.More(); e.Next()) {
+      GProp_GProps props;
+      // With a requested precision OCCT integrates adaptively and returns its relative error estimate.
+      const double relative = BRepGProp::VolumeProperties(e.Current(), props, 1e-9);
+      out.volume_mm3 += std::fabs(props.Mass());
+      out.error_estimate_mm3 += std::fabs(relative * props.Mass());
+    }
   });
   if (!ran.ok()) return ran.error();
   if (failed) return Error{ErrorCode::kInternal, "shapes", "BRepAlgoAPI_Common failed"};
-  return volume;
+  return out;
 }
 
 Result<int> first_point_inside(const Shape& shape, const RigidTransform& pose, const std::vector<Vec3>& points,

@@ -40,9 +40,14 @@ Result<BrepContact> decide_brep_contact(const Shape& a, const RigidTransform& po
                                         const std::vector<std::pair<int, int>>& face_pairs, double touch_mm,
                                         double overlap_volume_mm3);
 
-// The volume the two solids share at their poses (Boolean common in the local frame) [mm^3].
-Result<double> shared_volume(const Shape& a, const RigidTransform& pose_a, const Shape& b, const RigidTransform& pose_b,
-                             const Vec3& frame_origin);
+// The volume the two solids share at their poses (Boolean common in the local frame) [mm^3], and
+// OCCT's estimate of its integration error.
+struct SharedVolume {
+  double volume_mm3 = 0.0;
+  double error_estimate_mm3 = 0.0;
+};
+Result<SharedVolume> shared_volume(const Shape& a, const RigidTransform& pose_a, const Shape& b, const RigidTransform& pose_b,
+                                   const Vec3& frame_origin);
 
 // The first of the world points lying strictly inside a solid of the shape at its pose (farther in
 // than tolerance_mm), or -1. A point on a body's exact surface found inside the other solid proves

@@ -95,6 +95,7 @@ void report_to_proto(const AuditSnapshot& snapshot, pb::AuditReport* out) {
     p->set_clearance_violation(c.clearance_violation);
     p->set_depth_mm(c.depth_mm);
     p->set_volume_mm3(c.volume_mm3);
+    p->set_volume_error_bound_mm3(c.volume_error_bound_mm3);
     to_proto(c.depth_direction, p->mutable_depth_direction());
     for (const ClashRegion& region : c.regions) {
       pb::ClashRegion* q = p->add_regions();
@@ -165,6 +166,7 @@ AuditSnapshot snapshot_from_report(const pb::AuditReport& report) {
     r.clash.depth_mm = c.depth_mm();
     r.clash.depth_direction = vec(c.depth_direction());
     r.clash.volume_mm3 = c.volume_mm3();
+    r.clash.volume_error_bound_mm3 = c.volume_error_bound_mm3();
     for (const pb::ClashRegion& q : c.regions())
       r.clash.regions.push_back({vec(q.point()), Aabb{vec(q.bounds_min()), vec(q.bounds_max())}, q.contact_pairs(), q.min_distance_mm()});
     s.clashes.push_back(std::move(r));

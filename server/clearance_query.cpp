@@ -1,5 +1,6 @@
 #include "server/clearance_query.h"
 
+#include "engine/exact_depth.h"
 #include "engine/pair_verdict.h"
 #include "kernel/contact_regions.h"
 #include "kernel/contact_verdict.h"
@@ -72,25 +73,46 @@ void add_regions(const std::vector<ProximityPair>& pairs, double merge_mm, const
   }
 }
 
+// The depth on the triangles, then (CAD parts) checked free on the exact faces.
 std::string add_depth(const PosedSide& a, const PosedSide& b, const Vec3& along, pb::ClearanceQueryResponse* response) {
+  const engine::PosedPart pa{a.part.get(), a.pose}, pb_{b.part.get(), b.pose};
+  double depth = 0.0;
+  Vec3 direction = Vec3::Zero();
+  std::string method;
+  bool exact = false;
   if (along != Vec3::Zero()) {
     auto d = penetration_along(*a.part->bvh, a.pose, *b.part->bvh, b.pose, along, kDepthResolutionMm);
     if (!d.ok()) return "depth: " + d.error().to_string() + "; ";
-    to_proto(Vec3(along.normalized()), response->mutable_depth_direction());
-    response->set_depth_mm(d.value().depth_mm);
-    response->set_depth_method("along the requested direction");
-    return "";
+    depth = d.value().depth_mm;
+    direction = along.normalized();
+    method = "along the requested direction";
+  } else {
+    auto found = penetration_vector(*a.part->bvh, a.pose, *b.part->bvh, b.pose, kDepthLatticeDirections, kDepthResolutionMm);
+    if (!found.ok()) return "depth: " + found.error().to_string() + "; ";
+    const DepthVector& d = found.value();
+    depth = d.depth_mm;
+    direction = d.direction;
+    exact = d.exact;
+    method = d.from_piece_axis ? "convex-piece or part axis" : "lattice direction";
+    response->set_depth_max_angle_deg(d.max_angle_between_samples_deg);
+    response->set_depth_pieces_a(static_cast<std::uint32_t>(d.pieces_a));
+    response->set_depth_pieces_b(static_cast<std::uint32_t>(d.pieces_b));
   }
-  auto depth = penetration_vector(*a.part->bvh, a.pose, *b.part->bvh, b.pose, kDepthLatticeDirections, kDepthResolutionMm);
-  if (!depth.ok()) return "depth: " + depth.error().to_string() + "; ";
-  const DepthVector& d = depth.value();
-  to_proto(d.direction, response->mutable_depth_direction());
-  response->set_depth_mm(d.depth_mm);
-  response->set_depth_max_angle_deg(d.max_angle_between_samples_deg);
-  response->set_depth_exact(d.exact);
-  response->set_depth_method(d.from_piece_axis ? "convex-piece or part axis" : "lattice direction");
-  response->set_depth_pieces_a(static_cast<std::uint32_t>(d.pieces_a));
-  response->set_depth_pieces_b(static_cast<std::uint32_t>(d.pieces_b));
+  auto checked = engine::check_depth_on_brep(pa, pb_, direction, depth);
+  if (!checked.ok()) return "depth: " + checked.error().message + "; ";
+  if (engine::deflection_window(pa, pb_) > 0.0) {
+    exact = false;  // found on a tessellation, not on the parts
+    if (!checked.value().checked)
+      method += " (on the tessellation: a CAD part against a mesh is not checked on the exact faces)";
+    else
+      method += "; checked free on the exact faces" +
+                (checked.value().extensions > 0 ? " after adding " + std::to_string(checked.value().extensions) +
+                                                      "x the deflections" : std::string());
+  }
+  to_proto(direction, response->mutable_depth_direction());
+  response->set_depth_mm(checked.value().depth_mm);
+  response->set_depth_exact(exact);
+  response->set_depth_method(method);
   return "";
 }
 
@@ -100,7 +122,8 @@ std::string add_volume(const PosedSide& a, const PosedSide& b, const Vec3& near_
     // In a frame local to the overlap: OCCT's Booleans lose overlaps at factory coordinates.
     auto exact = occt::shared_volume(a.part->shape, a.pose, b.part->shape, b.pose, near_point);
     if (exact.ok()) {
-      response->set_interference_volume_mm3(exact.value());
+      response->set_interference_volume_mm3(exact.value().volume_mm3);
+      response->set_volume_error_bound_mm3(exact.value().error_estimate_mm3);
       response->set_volume_cell_mm(0.0);
       response->set_volume_method("brep boolean common");
       return "";
@@ -111,6 +134,7 @@ std::string add_volume(const PosedSide& a, const PosedSide& b, const Vec3& near_
   if (!volume.ok())
     return "volume: " + volume.error().to_string() + " (an open or non-manifold mesh has no inside)" + why_not_brep;
   response->set_interference_volume_mm3(volume.value().volume_mm3);
+  response->set_volume_error_bound_mm3(volume.value().error_bound_mm3);
   response->set_volume_cell_mm(volume.value().cell_mm);
   response->set_volume_method("mesh ray cast" + why_not_brep);
   return "";

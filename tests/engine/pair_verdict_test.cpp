@@ -3,7 +3,9 @@
 // part by less than the 0.05 mm tessellation — at the origin and at 5e4 mm, with the offset written
 // into the file and with it in the pose. The shapes are built with OCCT's primitives, written to
 // BREP bytes and read back through the project's reader, as an upload would be.
+#include "engine/exact_depth.h"
 #include "engine/pair_verdict.h"
+#include "kernel/penetration_depth.h"
 #include "kernel/tolerances.h"
 #include "occt_adapters/shape_import.h"
 #include "occt_adapters/shape_mesher.h"
@@ -166,6 +168,28 @@ TEST(CadPairVerdict, ACadPartAgainstAMeshIsNeverWronglyClear) {
         << describe(v.value());
     if (v.value().result.verdict == Verdict::kInconclusive) {
       EXPECT_EQ(v.value().result.inconclusive_reason, InconclusiveReason::kTessellationUnresolved);
+    }
+  }
+}
+
+// A depth found on the tessellations frees the tessellations; moved by what check_depth_on_brep
+// reports, the exact spheres are free too (their analytic distance is >= 0).
+TEST(CadDepth, TheReportedDepthFreesTheExactSolids) {
+  auto ball = cad_part(sphere(Vec3::Zero(), 50.0));
+  for (double base : {0.0, 5e4}) {
+    for (double overlap : {0.02, 2.0}) {
+      const Vec3 dir = Vec3(1, 0.3, -0.2).normalized();
+      const RigidTransform pa = RigidTransform::from_translation(Vec3(base, 0, 0));
+      const RigidTransform pb = RigidTransform::from_translation(Vec3(base, 0, 0) + (100.0 - overlap) * dir);
+      auto found = penetration_vector(*ball->bvh, pa, *ball->bvh, pb, 162, 1e-4);
+      ASSERT_TRUE(found.ok());
+      auto checked = check_depth_on_brep({ball.get(), pa}, {ball.get(), pb}, found.value().direction, found.value().depth_mm);
+      ASSERT_TRUE(checked.ok()) << checked.error().to_string();
+      EXPECT_TRUE(checked.value().checked);
+      const Vec3 moved_centre = pb.translation + checked.value().depth_mm * found.value().direction.normalized();
+      EXPECT_GE((moved_centre - pa.translation).norm(), 100.0 - 1e-4)
+          << "overlap " << overlap << " depth " << checked.value().depth_mm << " extensions " << checked.value().extensions;
+      EXPECT_GE(checked.value().depth_mm, overlap - 1e-4);
     }
   }
 }

@@ -231,3 +231,35 @@ TEST(FullPrecision, MutatedFilesComeBackAsMeshesOrErrorsNeverACrash) {
 
 }  // namespace
 }  // namespace gk::mesh_io
+
+namespace gk::mesh_io {
+namespace {
+
+// Written numbers too small for a double round to zero (or a subnormal), as a correctly rounding
+// reader must; too large ones are refused.
+TEST(FullPrecision, UnderflowingCoordinatesRoundToZeroAndOverflowingOnesAreRefused) {
+  auto tiny = read_mesh_bytes("v 1e-400 0 0\nv 1 0 0\nv 0 1 -4.9e-320\nf 1 2 3\n", "obj");
+  ASSERT_TRUE(tiny.ok()) << tiny.error().to_string();
+  EXPECT_EQ(tiny.value().vertices()[0].x(), 0.0);
+  EXPECT_EQ(tiny.value().vertices()[2].z(), -4.9e-320);  // a subnormal, kept
+  EXPECT_FALSE(read_mesh_bytes("v 1e400 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "obj").ok());
+}
+
+// PLY allows any element order: faces declared (and written) before the vertices they index.
+TEST(FullPrecision, PlyFacesBeforeVerticesAreRead) {
+  const std::string ply =
+      "ply\nformat ascii 1.0\nelement face 1\nproperty list uchar int vertex_indices\nelement vertex 3\n"
+      "property double x\nproperty double y\nproperty double z\nend_header\n3 0 1 2\n50000.001 0 0\n50001 0 0\n50000 1 0\n";
+  auto read = read_mesh_bytes(ply, "ply");
+  ASSERT_TRUE(read.ok()) << read.error().to_string();
+  EXPECT_EQ(read.value().triangle_count(), 1u);
+  EXPECT_EQ(read.value().vertices()[0].x(), 50000.001);
+  EXPECT_FALSE(read_mesh_bytes(
+                   "ply\nformat ascii 1.0\nelement face 1\nproperty list uchar int vertex_indices\nelement vertex 3\n"
+                   "property double x\nproperty double y\nproperty double z\nend_header\n3 0 1 3\n0 0 0\n1 0 0\n0 1 0\n",
+                   "ply")
+                   .ok());
+}
+
+}  // namespace
+}  // namespace gk::mesh_io
