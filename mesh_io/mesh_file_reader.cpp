@@ -2,10 +2,6 @@
 
 #include "mesh_io/format_readers.h"
 
-#include <assimp/Importer.hpp>
-#include <assimp/postprocess.h>
-#include <assimp/scene.h>
-
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -20,60 +16,6 @@
 namespace gk::mesh_io {
 namespace {
 
-// Normals would keep STL corners apart when joining vertices: drop them, we do not use them.
-// Joining runs only after the coordinates were checked: Assimp would merge a NaN corner into a
-// finite one and hide it.
-constexpr unsigned int kImportFlags = aiProcess_Triangulate | aiProcess_DropNormals | aiProcess_PreTransformVertices;
-
-// The first non-finite coordinate in the scene, as an error naming where it is.
-std::optional<Error> find_non_finite(const aiScene* scene, const std::string& source) {
-  for (unsigned int m = 0; m < scene->mNumMeshes; ++m) {
-    const aiMesh* mesh = scene->mMeshes[m];
-    for (unsigned int v = 0; v < mesh->mNumVertices; ++v) {
-      const aiVector3D& p = mesh->mVertices[v];
-      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-        return invalid_argument(source + ": meshes[" + std::to_string(m) + "].vertices[" + std::to_string(v) + "]",
-                                "coordinate is not finite");
-    }
-  }
-  return std::nullopt;
-}
-
-Result<const aiScene*> checked_scene(Assimp::Importer& importer, const aiScene* scene, const std::string& source,
-                                     const ReadOptions& options) {
-  if (scene == nullptr || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
-    return invalid_argument(source, std::string("cannot read mesh file: ") + importer.GetErrorString());
-  if (auto bad = find_non_finite(scene, source)) return *bad;
-  if (options.merge_identical_vertices) {
-    scene = importer.ApplyPostProcessing(aiProcess_JoinIdenticalVertices);
-    if (scene == nullptr) return invalid_argument(source, std::string("cannot merge vertices: ") + importer.GetErrorString());
-  }
-  return scene;
-}
-
-Result<TriangleMesh> convert(const aiScene* scene, const std::string& source, const ReadOptions& options) {
-  std::vector<Vec3> vertices;
-  std::vector<TriangleMesh::Face> faces;
-  for (unsigned int m = 0; m < scene->mNumMeshes; ++m) {
-    const aiMesh* mesh = scene->mMeshes[m];
-    if (!(mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;  // points and lines carry no surface
-    const auto base = static_cast<std::uint32_t>(vertices.size());
-    for (unsigned int v = 0; v < mesh->mNumVertices; ++v) {
-      const aiVector3D& p = mesh->mVertices[v];
-      vertices.emplace_back(p.x, p.y, p.z);
-    }
-    for (unsigned int f = 0; f < mesh->mNumFaces; ++f) {
-      const aiFace& face = mesh->mFaces[f];
-      if (face.mNumIndices != 3) continue;
-      faces.push_back({base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]});
-    }
-  }
-  if (faces.empty()) return invalid_argument(source, "file holds no triangles");
-  auto mesh = TriangleMesh::create(std::move(vertices), std::move(faces), options.build);
-  if (!mesh.ok()) return invalid_argument(source + ": " + mesh.error().field, mesh.error().message);
-  return mesh;
-}
-
 std::string lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return s;
@@ -85,6 +27,7 @@ Result<RawMesh> (*own_reader(const std::string& format))(std::string_view) {
   if (format == "off") return read_off;
   if (format == "ply") return read_ply;
   if (format == "stl") return read_stl;
+  if (format == "gltf" || format == "glb") return read_gltf;
   return nullptr;
 }
 
@@ -134,29 +77,20 @@ Result<TriangleMesh> read_mesh_file(const std::string& path, const ReadOptions& 
   if (!std::filesystem::is_regular_file(path, ec)) return invalid_argument(path, "no such file");
   const std::string format = lower(std::filesystem::path(path).extension().string().substr(std::min<std::size_t>(
       1, std::filesystem::path(path).extension().string().size())));
-  if (own_reader(format)) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream bytes;
-    bytes << in.rdbuf();
-    if (!in) return invalid_argument(path, "cannot read the file");
-    if (bytes.str().empty()) return invalid_argument(path, "empty file");
-    return read_own(bytes.str(), format, path, options);
-  }
-  Assimp::Importer importer;
-  auto scene = checked_scene(importer, importer.ReadFile(path, kImportFlags), path, options);
-  if (!scene.ok()) return scene.error();
-  return convert(scene.value(), path, options);
+  if (!own_reader(format)) return invalid_argument(path, "unknown mesh format '" + format + "'");
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  if (!in) return invalid_argument(path, "cannot read the file");
+  if (bytes.str().empty()) return invalid_argument(path, "empty file");
+  return read_own(bytes.str(), format, path, options);
 }
 
 Result<TriangleMesh> read_mesh_bytes(const std::string& bytes, const std::string& format_hint,
                                      const ReadOptions& options) {
   if (bytes.empty()) return invalid_argument("bytes", "empty mesh payload");
-  if (own_reader(lower(format_hint))) return read_own(bytes, lower(format_hint), "bytes (" + format_hint + ")", options);
-  Assimp::Importer importer;
-  const aiScene* raw = importer.ReadFileFromMemory(bytes.data(), bytes.size(), kImportFlags, format_hint.c_str());
-  auto scene = checked_scene(importer, raw, "bytes (" + format_hint + ")", options);
-  if (!scene.ok()) return scene.error();
-  return convert(scene.value(), "bytes", options);
+  if (!own_reader(lower(format_hint))) return invalid_argument("format", "unknown mesh format '" + format_hint + "'");
+  return read_own(bytes, lower(format_hint), "bytes (" + format_hint + ")", options);
 }
 
 }  // namespace gk::mesh_io

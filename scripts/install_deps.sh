@@ -13,7 +13,6 @@ PACKAGES=(
   libtbb-dev
   libeigen3-dev
   # mesh files (STL, OBJ, OFF, PLY, glTF)
-  libassimp-dev
   # peers and test/benchmark frameworks
   libfcl-dev libgtest-dev libgmock-dev libbenchmark-dev
   # service
