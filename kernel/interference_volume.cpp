@@ -12,8 +12,10 @@ namespace {
 
 // The grid is refined until the error bound is within this fraction of the volume... [1]
 constexpr double kTargetRelativeError = 0.01;
-// ...or this many rays are cast. [rays]
+// ...or this many rays are cast... [rays]
 constexpr double kMaxRays = 1.1e6;
+// ...while fewer than this many rays cross the overlap (beyond, the grid resolves it). [rays]
+constexpr int kResolvedRays = 4096;
 
 
 // Parameters t where origin + t * dir crosses the mesh (mesh-local ray), through the BVH.
@@ -117,8 +119,11 @@ VolumeEstimate cast_rays(const MeshBvh& a, const RigidTransform& pose_a, const M
       crossings(b, to_b.apply(start), dir_b, tb);
       if (tb.size() < 2) continue;
       ++out.rays;
+      double length = 0.0;
       for (const auto& x : inside(ta))
-        for (const auto& y : inside(tb)) total += std::max(0.0, std::min(x[1], y[1]) - std::max(x[0], y[0]));
+        for (const auto& y : inside(tb)) length += std::max(0.0, std::min(x[1], y[1]) - std::max(x[0], y[0]));
+      total += length;
+      if (length > 0.0) ++out.rays_in_overlap;
     }
   }
   out.volume_mm3 = total * dx * dy;
@@ -139,11 +144,12 @@ Result<VolumeEstimate> interference_volume(const MeshBvh& a, const RigidTransfor
   const Aabb ba = transformed_box(a.root_bounds(), pose_a), bb = transformed_box(b.root_bounds(), pose_b);
   const Vec3 lo = ba.min.cwiseMax(bb.min), hi = ba.max.cwiseMin(bb.max);
   if (!((hi - lo).array() > 0.0).all()) return VolumeEstimate{};
-  // Refined while the bound exceeds 1 % of the volume (or the volume is 0 with a bound), up to
-  // kMaxRays rays.
+  // A grid too coarse for the overlap (few rays inside it: a corner, a sliver) is refined while the
+  // bound exceeds 1 % of the volume, up to kMaxRays rays. Where many rays cross the overlap the
+  // bound is dominated by the triangle edges' projections and refining buys little.
   VolumeEstimate out = cast_rays(a, pose_a, b, pose_b, lo, hi, cells_per_axis);
   for (int n = cells_per_axis * 2; n <= 4096 && static_cast<double>(n) * n <= kMaxRays; n *= 2) {
-    if (out.error_bound_mm3 <= kTargetRelativeError * out.volume_mm3) break;
+    if (out.error_bound_mm3 <= kTargetRelativeError * out.volume_mm3 || out.rays_in_overlap >= kResolvedRays) break;
     out = cast_rays(a, pose_a, b, pose_b, lo, hi, n);
   }
   return out;

@@ -4,9 +4,11 @@
 //
 // The error is bounded, not estimated: in a cell that no triangle edge crosses (projected on the
 // grid's plane) the overlap length is linear, so the centre ray gives the cell's volume exactly; a
-// cell crossed by an edge can err by at most its area times the overlap's height. The grid is
-// refined (up to about a million rays) until that bound is within 1 % of the volume. Exact B-Rep
-// volumes come from occt_adapters (Boolean common).
+// cell crossed by an edge can err by at most its area times the overlap's height. A grid with few
+// rays inside the overlap (a corner, a sliver) is refined, up to about a million rays, until the
+// bound is within 1 % of the volume; on finely tessellated parts the bound stays loose (edges
+// everywhere) while the figure itself is far better. Exact B-Rep volumes come from occt_adapters
+// (Boolean common).
 #pragma once
 
 #include "kernel/mesh_bvh.h"
@@ -19,7 +21,8 @@ struct VolumeEstimate {
   double volume_mm3 = 0.0;
   double error_bound_mm3 = 0.0;  // |volume_mm3 - true shared volume| <= this
   double cell_mm = 0.0;   // grid spacing used (the larger of the two cell sides)
-  int rays = 0;
+  int rays = 0;             // rays through both meshes' boxes
+  int rays_in_overlap = 0;  // ... with a non-zero overlap length
 };
 
 // Both meshes must be closed and consistently oriented; cells_per_axis in [4, 4096]: the first grid.

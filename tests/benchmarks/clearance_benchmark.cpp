@@ -3,6 +3,7 @@
 //    each through BRepExtrema), against BRepExtrema on the whole shapes;
 //  - the penetration depth vector of interpenetrating large meshes.
 //   build/tests/benchmarks/clearance_benchmark [--benchmark_filter=...]
+#include "engine/pair_verdict.h"
 #include "kernel/contact_regions.h"
 #include "kernel/interference_volume.h"
 #include "kernel/contact_verdict.h"
@@ -120,6 +121,52 @@ void BM_Cad_BrepRefinement(benchmark::State& state) {
   state.counters["face_pairs_per_query"] = face_pairs / static_cast<double>(p.poses.size());
 }
 
+// The verdict of two CAD parts closer than their tessellation can tell (signed gaps uniform in
+// [-0.05, 0.05] mm, set on the meshes): the engine decides on the exact faces (engine/pair_verdict).
+void BM_Cad_ExactFaceDecision(benchmark::State& state) {
+  const CadPair& p = cad_pair();
+  gk::engine::PartGeometry a, b;
+  a.bvh = p.bvh_a;
+  a.mesh = gk::testing::share(p.bvh_a->mesh());
+  a.shape = p.a;
+  a.face_of_triangle = p.face_of_a;
+  a.deflection_mm = 0.05;
+  b.bvh = p.bvh_b;
+  b.mesh = gk::testing::share(p.bvh_b->mesh());
+  b.shape = p.b;
+  b.face_of_triangle = p.face_of_b;
+  b.deflection_mm = 0.05;
+  gk::testing::Rng rng(32);
+  std::uniform_real_distribution<double> gap(-0.05, 0.05);
+  std::vector<RigidTransform> poses;
+  for (RigidTransform pose : p.poses) {
+    const auto d = must(gk::distance(*p.bvh_a, {}, *p.bvh_b, pose));
+    pose.translation -= (d.distance_mm - gap(rng)) * (d.point_b - d.point_a).normalized();
+    poses.push_back(pose);
+  }
+  std::vector<double> us;
+  int clear = 0, touching = 0, collision = 0, inconclusive = 0, on_brep = 0;
+  for (auto _ : state)
+    for (const RigidTransform& pose : poses) {
+      const auto t0 = Clock::now();
+      const gk::engine::PairVerdict v = must(gk::engine::decide_pair({&a, {}}, {&b, pose}));
+      us.push_back(since(t0));
+      on_brep += v.decided_on_brep ? 1 : 0;
+      switch (v.result.verdict) {
+        case gk::Verdict::kClear: ++clear; break;
+        case gk::Verdict::kTouching: ++touching; break;
+        case gk::Verdict::kCollision: ++collision; break;
+        case gk::Verdict::kInconclusive: ++inconclusive; break;
+      }
+    }
+  report(state, us);
+  state.counters["clear"] = clear;
+  state.counters["touching"] = touching;
+  state.counters["collision"] = collision;
+  state.counters["inconclusive"] = inconclusive;
+  state.counters["on_brep"] = on_brep;
+}
+
 // The slow peer: BRepExtrema_DistShapeShape on the whole placed shapes.
 void BM_Cad_BrepExtremaWhole(benchmark::State& state) {
   const CadPair& p = cad_pair();
@@ -185,20 +232,25 @@ void BM_Volume_RayCastVsBoolean(benchmark::State& state) {
   const RigidTransform pose = RigidTransform::from_axis_angle(Vec3(0.3, 0.2, 1.0).normalized(), 10.0 * 3.14159265358979323846 / 180.0,
                                                               Vec3(2.0, 0.5, 0.0));
   const int cells = static_cast<int>(state.range(0));
-  double reference = 0.0, boolean_ms = 0.0, volume = 0.0, ray_ms = 0.0;
+  double reference = 0.0, boolean_ms = 0.0, volume = 0.0, ray_ms = 0.0, bound = 0.0, cell = 0.0;
   for (auto _ : state) {
     auto t0 = Clock::now();
     reference = must(gk::occt::interference_volume(nut, must(gk::occt::place(nut, pose))));
     boolean_ms = since(t0) / 1000.0;
     t0 = Clock::now();
-    volume = must(gk::interference_volume(*mesh, {}, *mesh, pose, cells)).volume_mm3;
+    const gk::VolumeEstimate v = must(gk::interference_volume(*mesh, {}, *mesh, pose, cells));
     ray_ms = since(t0) / 1000.0;
+    volume = v.volume_mm3;
+    bound = v.error_bound_mm3;
+    cell = v.cell_mm;
   }
   state.counters["boolean_mm3"] = reference;
   state.counters["boolean_ms"] = boolean_ms;
   state.counters["raycast_mm3"] = volume;
   state.counters["raycast_ms"] = ray_ms;
   state.counters["raycast_error_pct"] = 100.0 * (volume - reference) / reference;
+  state.counters["raycast_bound_pct"] = 100.0 * bound / reference;
+  state.counters["raycast_cell_mm"] = cell;
 }
 
 }  // namespace
@@ -206,6 +258,7 @@ void BM_Volume_RayCastVsBoolean(benchmark::State& state) {
 BENCHMARK(BM_Volume_RayCastVsBoolean)->Arg(64)->Arg(128)->Arg(256)->Arg(512)->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_Cad_MeshAnswer)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_Cad_BrepRefinement)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_Cad_ExactFaceDecision)->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_Cad_BrepExtremaWhole)->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_Large_DepthVector)->Unit(benchmark::kMillisecond)->Iterations(1);
 
