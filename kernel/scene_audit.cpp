@@ -186,9 +186,12 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
     for (const Aabb& b : boxes) scene.extend(b);
     std::size_t nx = 1, ny = 1;
     if (options.tile_mm > 0.0 && !scene.empty()) {
-      nx = static_cast<std::size_t>(std::ceil(scene.diagonal().x() / options.tile_mm)) + 1;
-      ny = static_cast<std::size_t>(std::ceil(scene.diagonal().y() / options.tile_mm)) + 1;
-      if (nx * ny > kMaxTiles) return invalid_argument("tile_mm", "gives more than 2^20 tiles for this scene");
+      // Counted in double first: a tiny tile (1e-17 mm) would overflow any integer.
+      const double tx = std::ceil(scene.diagonal().x() / options.tile_mm) + 1.0;
+      const double ty = std::ceil(scene.diagonal().y() / options.tile_mm) + 1.0;
+      if (!(tx * ty <= static_cast<double>(kMaxTiles))) return invalid_argument("tile_mm", "gives more than 2^20 tiles for this scene");
+      nx = static_cast<std::size_t>(tx);
+      ny = static_cast<std::size_t>(ty);
     }
     const double tile = options.tile_mm > 0.0 ? options.tile_mm : 1.0;
     auto tile_x = [&](double x) {

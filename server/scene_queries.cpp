@@ -143,6 +143,21 @@ void AuditJob::update(const std::function<void(AuditSnapshot&)>& change) {
     state_.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
   }
   changed_.notify_all();
+  std::lock_guard<std::mutex> lock(watchers_mutex_);
+  for (auto& [token, on_change] : watchers_) on_change();
+}
+
+std::uint64_t AuditJob::subscribe(std::function<void()> on_change) {
+  std::lock_guard<std::mutex> lock(watchers_mutex_);
+  if (watchers_.size() >= kMaxWatchers) return 0;
+  const std::uint64_t token = next_watcher_++;
+  watchers_[token] = std::move(on_change);
+  return token;
+}
+
+void AuditJob::unsubscribe(std::uint64_t token) {
+  std::lock_guard<std::mutex> lock(watchers_mutex_);
+  watchers_.erase(token);
 }
 
 void AuditJob::end(const std::function<void(AuditSnapshot&)>& change) {

@@ -122,6 +122,12 @@ class AuditJob {
   AuditSnapshot snapshot() const;
   // Waits until the progress changes (or timeout); returns the snapshot.
   AuditSnapshot wait_for_change(unsigned long long seen_done, AuditStatus seen_status, std::chrono::milliseconds timeout) const;
+  // Watchers are told of every change (called on the thread that made it, never under the job's
+  // state lock). At most kMaxWatchers at once: subscribe returns 0 beyond. Unsubscribe returns
+  // only once no call to that watcher is running, so the watcher may be destroyed then.
+  static constexpr std::size_t kMaxWatchers = 64;
+  std::uint64_t subscribe(std::function<void()> on_change);
+  void unsubscribe(std::uint64_t token);
   const SceneRecord& scene() const { return scene_; }
   std::vector<AuditedObject> objects() const;
 
@@ -138,6 +144,9 @@ class AuditJob {
   std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
   mutable std::mutex mutex_;
   mutable std::condition_variable changed_;
+  std::mutex watchers_mutex_;
+  std::map<std::uint64_t, std::function<void()>> watchers_;
+  std::uint64_t next_watcher_ = 1;
   AuditSnapshot state_;
   std::vector<AuditedObject> objects_;
 };

@@ -42,46 +42,75 @@ class DragReactor final : public grpc::ServerBidiReactor<pb::MoveObjectRequest, 
 };
 
 // Streams an audit's progress until it ends; the job itself runs whether or not anyone watches.
+// Driven by the job's change notifications: no thread of its own. A change that arrives while a
+// write is in flight is coalesced into one write of the latest state when that write completes.
 class WatchReactor final : public grpc::ServerWriteReactor<pb::AuditProgress> {
  public:
-  WatchReactor(std::shared_ptr<AuditJob> job, std::string job_id, grpc::CallbackServerContext* ctx)
-      : job_(std::move(job)), id_(std::move(job_id)), ctx_(ctx) {
-    next();
+  WatchReactor(std::shared_ptr<AuditJob> job, std::string job_id) : job_(std::move(job)), id_(std::move(job_id)) {
+    std::lock_guard<std::recursive_mutex> lock(mutex_);
+    token_ = job_->subscribe([this] { on_change(); });
+    if (token_ == 0) {
+      finished_ = true;
+      Finish({grpc::StatusCode::RESOURCE_EXHAUSTED, "too many watchers of this audit: retry later"});
+      return;
+    }
+    write_latest();
   }
   void OnWriteDone(bool ok) override {
-    if (!ok) return Finish({grpc::StatusCode::CANCELLED, "the client went away"});
-    if (last_.status != AuditStatus::kRunning) return Finish(grpc::Status::OK);
-    next();
+    std::lock_guard<std::recursive_mutex> lock(mutex_);
+    writing_ = false;
+    if (finished_) return;
+    if (!ok) return finish({grpc::StatusCode::CANCELLED, "the client went away"});
+    if (last_status_ != AuditStatus::kRunning) return finish(grpc::Status::OK);
+    if (pending_) write_latest();
+  }
+  void OnCancel() override {
+    std::lock_guard<std::recursive_mutex> lock(mutex_);
+    if (!finished_ && !writing_) finish({grpc::StatusCode::CANCELLED, "cancelled"});
+    cancelled_ = true;
   }
   void OnDone() override {
-    if (waiter_.joinable()) waiter_.join();
+    if (token_ != 0) job_->unsubscribe(token_);  // no call to on_change runs after this
     delete this;
   }
 
  private:
-  // Waits for progress off the callback threads, then writes it.
-  void next() {
-    if (waiter_.joinable()) waiter_.join();
-    waiter_ = std::thread([this] {
-      last_ = first_ ? job_->snapshot() : job_->wait_for_change(seen_done_, seen_status_, std::chrono::milliseconds(200));
-      first_ = false;
-      seen_done_ = last_.pairs_done;
-      seen_status_ = last_.status;
-      progress_.Clear();
-      progress_to_proto(id_, last_, &progress_);
-      if (ctx_->IsCancelled()) return Finish({grpc::StatusCode::CANCELLED, "cancelled"});
-      StartWrite(&progress_);
-    });
+  void on_change() {
+    std::lock_guard<std::recursive_mutex> lock(mutex_);
+    if (finished_) return;
+    if (writing_) {
+      pending_ = true;
+      return;
+    }
+    write_latest();
+  }
+  // Under mutex_: writes the job's current state unless nothing changed since the last write.
+  void write_latest() {
+    pending_ = false;
+    if (cancelled_) return finish({grpc::StatusCode::CANCELLED, "cancelled"});
+    const AuditSnapshot s = job_->snapshot();
+    if (written_ && s.pairs_done == last_done_ && s.status == last_status_ && s.tiles_done == last_tiles_) return;
+    written_ = true;
+    last_done_ = s.pairs_done;
+    last_tiles_ = s.tiles_done;
+    last_status_ = s.status;
+    progress_.Clear();
+    progress_to_proto(id_, s, &progress_);
+    writing_ = true;
+    StartWrite(&progress_);
+  }
+  void finish(const grpc::Status& status) {
+    finished_ = true;
+    Finish(status);
   }
 
   std::shared_ptr<AuditJob> job_;
   std::string id_;
-  grpc::CallbackServerContext* ctx_;
-  std::thread waiter_;
-  AuditSnapshot last_;
-  bool first_ = true;
-  unsigned long long seen_done_ = 0;
-  AuditStatus seen_status_ = AuditStatus::kRunning;
+  std::uint64_t token_ = 0;
+  std::recursive_mutex mutex_;  // a reaction may run inline from StartWrite
+  bool writing_ = false, pending_ = false, finished_ = false, cancelled_ = false, written_ = false;
+  unsigned long long last_done_ = 0, last_tiles_ = 0;
+  AuditStatus last_status_ = AuditStatus::kRunning;
   pb::AuditProgress progress_;
 };
 
@@ -253,7 +282,7 @@ grpc::ServerUnaryReactor* GatekeeperService::StartAudit(grpc::CallbackServerCont
   return finish(ctx, stats_, "StartAudit", t0, grpc::Status::OK);
 }
 
-grpc::ServerWriteReactor<pb::AuditProgress>* GatekeeperService::WatchAudit(grpc::CallbackServerContext* ctx,
+grpc::ServerWriteReactor<pb::AuditProgress>* GatekeeperService::WatchAudit(grpc::CallbackServerContext* /*ctx*/,
                                                                           const pb::WatchAuditRequest* request) {
   auto job = audits_.get(request->job_id());
   if (!job.ok()) {
@@ -263,7 +292,7 @@ grpc::ServerWriteReactor<pb::AuditProgress>* GatekeeperService::WatchAudit(grpc:
     };
     return new Refused(to_status(job.error()));
   }
-  return new WatchReactor(job.value(), request->job_id(), ctx);
+  return new WatchReactor(job.value(), request->job_id());
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::CancelAudit(grpc::CallbackServerContext* ctx, const pb::CancelAuditRequest* request,

@@ -1,0 +1,111 @@
+// A hostile client against the real daemon (issue: hardened service §1): requests that used to
+// kill it. After each, the daemon must still answer.
+#include "tests/server/daemon_fixture.h"
+#include "tests/support/random_meshes.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <thread>
+#include <vector>
+
+namespace gk {
+namespace {
+
+namespace pb = ::gatekeeper::v1;
+using testing::Daemon;
+
+void expect_alive(pb::Gatekeeper::Stub& stub) {
+  grpc::ClientContext ctx;
+  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(10));
+  pb::ServerInfo info;
+  EXPECT_TRUE(stub.GetServerInfo(&ctx, pb::GetServerInfoRequest(), &info).ok()) << "the daemon stopped answering";
+}
+
+// A scene of n robot copies along x, 150 mm apart (neighbours clash), for audits that take a while.
+std::string robot_row(pb::Gatekeeper::Stub& stub, int n) {
+  const std::string rob = testing::upload_part_id(stub, testing::read_file(testing::shared_data("meshes/fcl/rob.obj")), "obj");
+  grpc::ClientContext cctx;
+  pb::SceneInfo scene;
+  EXPECT_TRUE(stub.CreateScene(&cctx, pb::CreateSceneRequest(), &scene).ok());
+  pb::PutObjectsRequest put;
+  put.set_scene_id(scene.scene_id());
+  for (int i = 0; i < n; ++i) {
+    pb::SceneObject* o = put.add_objects();
+    o->set_part_id(rob);
+    o->set_name("rob" + std::to_string(i));
+    o->set_category("robot");
+    o->mutable_pose()->mutable_translation()->set_x_mm(150.0 * i);
+  }
+  grpc::ClientContext pctx;
+  pb::PutObjectsResponse ids;
+  EXPECT_TRUE(stub.PutObjects(&pctx, put, &ids).ok());
+  return scene.scene_id();
+}
+
+TEST(HostileClientE2E, ATinyTileIsRefusedNotACrash) {
+  Daemon daemon(testing::temp_dir("hostile-tile"));
+  auto stub = daemon.stub();
+  const std::string scene = robot_row(*stub, 3);
+  for (double tile : {1e-17, 1e-300, 5e-324}) {
+    pb::StartAuditRequest start;
+    start.set_scene_id(scene);
+    start.set_tile_mm(tile);
+    pb::AuditJob job;
+    grpc::ClientContext ctx;
+    const grpc::Status s = stub->StartAudit(&ctx, start, &job);
+    if (s.ok()) {  // refused when the job runs: the job fails naming tile_mm
+      grpc::ClientContext gctx;
+      pb::GetAuditReportRequest get;
+      get.set_job_id(job.job_id());
+      pb::AuditReport report;
+      for (int i = 0; i < 100 && report.progress().state() != pb::FAILED; ++i) {
+        report.Clear();
+        grpc::ClientContext c;
+        ASSERT_TRUE(stub->GetAuditReport(&c, get, &report).ok());
+        if (report.progress().state() == pb::RUNNING) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        else break;
+      }
+      EXPECT_EQ(report.progress().state(), pb::FAILED) << tile;
+      EXPECT_NE(report.progress().message().find("tile_mm"), std::string::npos) << report.progress().message();
+    } else {
+      EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+    }
+    expect_alive(*stub);
+  }
+}
+
+TEST(HostileClientE2E, ThreeHundredWatchersOfARunningAuditNeitherKillItNorGoUnanswered) {
+  Daemon daemon(testing::temp_dir("hostile-watch"));
+  auto stub = daemon.stub();
+  const std::string scene = robot_row(*stub, 60);
+  pb::StartAuditRequest start;
+  start.set_scene_id(scene);
+  start.set_clearance_mm(20.0);
+  pb::AuditJob job;
+  grpc::ClientContext sctx;
+  ASSERT_TRUE(stub->StartAudit(&sctx, start, &job).ok());
+  std::atomic<int> done{0}, refused{0}, other{0};
+  std::vector<std::thread> watchers;
+  for (int i = 0; i < 300; ++i)
+    watchers.emplace_back([&] {
+      grpc::ClientContext ctx;
+      ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(120));
+      pb::WatchAuditRequest watch;
+      watch.set_job_id(job.job_id());
+      auto reader = stub->WatchAudit(&ctx, watch);
+      pb::AuditProgress p, last;
+      while (reader->Read(&p)) last = p;
+      const grpc::Status s = reader->Finish();
+      if (s.ok() && last.state() == pb::DONE) ++done;
+      else if (s.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED) ++refused;
+      else ++other;
+    });
+  for (std::thread& t : watchers) t.join();
+  EXPECT_EQ(done + refused, 300) << other << " watchers ended otherwise";
+  EXPECT_GE(done.load(), 64);
+  expect_alive(*stub);
+}
+
+}  // namespace
+}  // namespace gk
