@@ -29,6 +29,17 @@ class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> 
   }
 
   void OnReadDone(bool ok) override {
+    const grpc::Status read = guarded_status("UploadPart", [&] {
+      on_read(ok);
+      return grpc::Status::OK;
+    });
+    if (!read.ok()) fail_with(read);
+  }
+
+  void OnDone() override { delete this; }
+
+ private:
+  void on_read(bool ok) {
     if (!ok) {  // the client closed its side (or went away): finish what arrived
       complete();
       return;
@@ -48,12 +59,10 @@ class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> 
     StartRead(&chunk_);
   }
 
-  void OnDone() override { delete this; }
-
- private:
-  void fail(const Error& e) {
+  void fail(const Error& e) { fail_with(to_status(e)); }
+  void fail_with(const grpc::Status& status) {
     upload_.reset();  // removes the temporary file
-    done(to_status(e));
+    done(status);
   }
 
   void done(const grpc::Status& status) {
@@ -65,6 +74,18 @@ class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> 
     if (!upload_) return done({grpc::StatusCode::INVALID_ARGUMENT, "header: no upload header received"});
     auto* self = this;
     const bool queued = service_.pool().try_submit([self] {
+      const grpc::Status status = guarded_status("UploadPart", [&]() -> grpc::Status {
+        return self->finish_upload();
+      });
+      self->done(status);
+    });
+    if (!queued) done({grpc::StatusCode::RESOURCE_EXHAUSTED, "work queue full: retry later"});
+  }
+
+  // On a worker: reads the upload (the mesh it describes) and records it.
+  grpc::Status finish_upload() {
+    auto* self = this;
+    {
       auto record = self->service_.parts().store().finish(
           std::move(self->upload_), [](const std::string& path, PartRecord r) -> Result<PartRecord> {
             auto mesh = PartRegistry::read_any(path, r.format, kPartDeflectionMm);
@@ -75,13 +96,12 @@ class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> 
             r.closed = mesh.value().is_closed_oriented();
             return r;
           });
-      if (!record.ok()) return self->done(to_status(record.error()));
+      if (!record.ok()) return to_status(record.error());
       to_proto(record.value(), self->reply_);
       spdlog::info("stored part {} ({} bytes, {} triangles)", record.value().id, record.value().size_bytes,
                    record.value().triangles);
-      self->done(grpc::Status::OK);
-    });
-    if (!queued) done({grpc::StatusCode::RESOURCE_EXHAUSTED, "work queue full: retry later"});
+      return grpc::Status::OK;
+    }
   }
 
   GatekeeperService& service_;
@@ -174,29 +194,31 @@ grpc::Status GatekeeperService::validate_one_unguarded(const pb::ValidateStepReq
 grpc::ServerUnaryReactor* GatekeeperService::ValidateStep(grpc::CallbackServerContext* ctx,
                                                           const pb::ValidateStepRequest* request,
                                                           pb::ValidateStepResponse* response) {
-  const auto t0 = Clock::now();
-  if (past_deadline(ctx)) return finish(ctx, stats_, "ValidateStep", t0, {grpc::StatusCode::DEADLINE_EXCEEDED, "deadline passed"});
-  return finish(ctx, stats_, "ValidateStep", t0, validate_one(*request, nullptr, "", response));
+  return unary(ctx, stats_, "ValidateStep", [&]() -> grpc::Status {
+    if (past_deadline(ctx)) return grpc::Status({grpc::StatusCode::DEADLINE_EXCEEDED, "deadline passed"});
+    return grpc::Status(validate_one(*request, nullptr, "", response));
+  });
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::ValidateSteps(grpc::CallbackServerContext* ctx,
                                                            const pb::ValidateStepsRequest* request,
                                                            pb::ValidateStepsResponse* response) {
-  const auto t0 = Clock::now();
-  response->set_first_failure(-1);
-  for (int i = 0; i < request->steps_size(); ++i) {
-    if (past_deadline(ctx) || ctx->IsCancelled())
-      return finish(ctx, stats_, "ValidateSteps", t0, {grpc::StatusCode::DEADLINE_EXCEEDED, "deadline passed after step " + std::to_string(i)});
-    pb::ValidateStepResponse* one = response->add_results();
-    grpc::Status s = validate_one(request->steps(i), request->has_part() ? &request->part() : nullptr, request->machine_id(), one);
-    if (!s.ok())
-      return finish(ctx, stats_, "ValidateSteps", t0, {s.error_code(), "steps[" + std::to_string(i) + "]." + s.error_message()});
-    if (one->verdict() != pb::CLEAR && response->first_failure() < 0) {
-      response->set_first_failure(i);
-      if (request->stop_at_first_failure()) break;
+  return unary(ctx, stats_, "ValidateSteps", [&]() -> grpc::Status {
+    response->set_first_failure(-1);
+    for (int i = 0; i < request->steps_size(); ++i) {
+      if (past_deadline(ctx) || ctx->IsCancelled())
+        return grpc::Status({grpc::StatusCode::DEADLINE_EXCEEDED, "deadline passed after step " + std::to_string(i)});
+      pb::ValidateStepResponse* one = response->add_results();
+      grpc::Status s = validate_one(request->steps(i), request->has_part() ? &request->part() : nullptr, request->machine_id(), one);
+      if (!s.ok())
+        return grpc::Status({s.error_code(), "steps[" + std::to_string(i) + "]." + s.error_message()});
+      if (one->verdict() != pb::CLEAR && response->first_failure() < 0) {
+        response->set_first_failure(i);
+        if (request->stop_at_first_failure()) break;
+      }
     }
-  }
-  return finish(ctx, stats_, "ValidateSteps", t0, grpc::Status::OK);
+    return grpc::Status(grpc::Status::OK);
+  });
 }
 
 grpc::Status GatekeeperService::clearance(const pb::ClearanceQueryRequest& request, pb::ClearanceQueryResponse* response) {
@@ -212,7 +234,7 @@ grpc::ServerUnaryReactor* GatekeeperService::ClearanceQuery(grpc::CallbackServer
     grpc::Status status;
     if (ctx->IsCancelled()) status = {grpc::StatusCode::CANCELLED, "cancelled by the client"};
     else if (past_deadline(ctx)) status = {grpc::StatusCode::DEADLINE_EXCEEDED, "deadline passed while queued"};
-    else status = clearance(*request, response);
+    else status = guarded_status("ClearanceQuery", [&] { return clearance(*request, response); });
     stats_.record("ClearanceQuery", us_since(t0), !status.ok());
     reactor->Finish(status);
   });
@@ -230,11 +252,12 @@ grpc::ServerReadReactor<pb::UploadPartChunk>* GatekeeperService::UploadPart(grpc
 
 grpc::ServerUnaryReactor* GatekeeperService::GetPartInfo(grpc::CallbackServerContext* ctx, const pb::GetPartInfoRequest* request,
                                                          pb::PartInfo* response) {
-  const auto t0 = Clock::now();
-  auto record = parts_.store().get(request->part_id());
-  if (!record.ok()) return finish(ctx, stats_, "GetPartInfo", t0, to_status(record.error()));
-  to_proto(record.value(), response);
-  return finish(ctx, stats_, "GetPartInfo", t0, grpc::Status::OK);
+  return unary(ctx, stats_, "GetPartInfo", [&]() -> grpc::Status {
+    auto record = parts_.store().get(request->part_id());
+    if (!record.ok()) return grpc::Status(to_status(record.error()));
+    to_proto(record.value(), response);
+    return grpc::Status(grpc::Status::OK);
+  });
 }
 
 grpc::Status GatekeeperService::machine_info(const std::string& id, pb::MachineInfo* response) {
@@ -252,59 +275,64 @@ grpc::Status GatekeeperService::machine_info(const std::string& id, pb::MachineI
 
 grpc::ServerUnaryReactor* GatekeeperService::ListMachines(grpc::CallbackServerContext* ctx, const pb::ListMachinesRequest*,
                                                           pb::ListMachinesResponse* response) {
-  const auto t0 = Clock::now();
-  for (const MachineSnapshot& m : machines_.list()) {
-    grpc::Status s = machine_info(m.id, response->add_machines());
-    if (!s.ok()) return finish(ctx, stats_, "ListMachines", t0, s);
-  }
-  return finish(ctx, stats_, "ListMachines", t0, grpc::Status::OK);
+  return unary(ctx, stats_, "ListMachines", [&]() -> grpc::Status {
+    for (const MachineSnapshot& m : machines_.list()) {
+      grpc::Status s = machine_info(m.id, response->add_machines());
+      if (!s.ok()) return grpc::Status(s);
+    }
+    return grpc::Status(grpc::Status::OK);
+  });
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::GetMachine(grpc::CallbackServerContext* ctx, const pb::GetMachineRequest* request,
                                                         pb::MachineInfo* response) {
-  const auto t0 = Clock::now();
-  return finish(ctx, stats_, "GetMachine", t0, machine_info(request->machine_id(), response));
+  return unary(ctx, stats_, "GetMachine", [&]() -> grpc::Status {
+    return grpc::Status(machine_info(request->machine_id(), response));
+  });
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::SetMachineState(grpc::CallbackServerContext* ctx,
                                                              const pb::SetMachineStateRequest* request, pb::MachineInfo* response) {
-  const auto t0 = Clock::now();
-  auto m = machines_.get(request->machine_id());
-  if (!m.ok()) return finish(ctx, stats_, "SetMachineState", t0, to_status(m.error()));
-  auto state = to_state(request->state(), m.value().model);
-  if (!state.ok()) return finish(ctx, stats_, "SetMachineState", t0, to_status(state.error()));
-  auto set = machines_.set_state(request->machine_id(), state.value());
-  if (!set.ok()) return finish(ctx, stats_, "SetMachineState", t0, to_status(set.error()));
-  return finish(ctx, stats_, "SetMachineState", t0, machine_info(request->machine_id(), response));
+  return unary(ctx, stats_, "SetMachineState", [&]() -> grpc::Status {
+    auto m = machines_.get(request->machine_id());
+    if (!m.ok()) return grpc::Status(to_status(m.error()));
+    auto state = to_state(request->state(), m.value().model);
+    if (!state.ok()) return grpc::Status(to_status(state.error()));
+    auto set = machines_.set_state(request->machine_id(), state.value());
+    if (!set.ok()) return grpc::Status(to_status(set.error()));
+    return grpc::Status(machine_info(request->machine_id(), response));
+  });
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::PutMachineModel(grpc::CallbackServerContext* ctx,
                                                              const pb::PutMachineModelRequest* request, pb::MachineInfo* response) {
-  const auto t0 = Clock::now();
-  auto put = machines_.put_model(request->machine_id(), request->model_toml());
-  if (!put.ok()) return finish(ctx, stats_, "PutMachineModel", t0, to_status(put.error()));
-  return finish(ctx, stats_, "PutMachineModel", t0, machine_info(request->machine_id(), response));
+  return unary(ctx, stats_, "PutMachineModel", [&]() -> grpc::Status {
+    auto put = machines_.put_model(request->machine_id(), request->model_toml());
+    if (!put.ok()) return grpc::Status(to_status(put.error()));
+    return grpc::Status(machine_info(request->machine_id(), response));
+  });
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::GetServerInfo(grpc::CallbackServerContext* ctx, const pb::GetServerInfoRequest*,
                                                            pb::ServerInfo* response) {
-  const auto t0 = Clock::now();
-  response->set_version(options_.version);
-  for (const MachineSnapshot& m : machines_.list()) response->add_machines(m.id);
-  for (const RpcStats::Summary& s : stats_.summaries()) {
-    pb::RpcStats* r = response->add_rpcs();
-    r->set_method(s.method);
-    r->set_calls(s.calls);
-    r->set_errors(s.errors);
-    r->set_p50_us(s.p50_us);
-    r->set_p99_us(s.p99_us);
-    for (std::size_t b = 0; b < RpcStats::kBuckets; ++b) {
-      r->add_histogram_bounds_us(static_cast<double>(1ull << b));
-      r->add_histogram_counts(s.histogram[b]);
+  return unary(ctx, stats_, "GetServerInfo", [&]() -> grpc::Status {
+    response->set_version(options_.version);
+    for (const MachineSnapshot& m : machines_.list()) response->add_machines(m.id);
+    for (const RpcStats::Summary& s : stats_.summaries()) {
+      pb::RpcStats* r = response->add_rpcs();
+      r->set_method(s.method);
+      r->set_calls(s.calls);
+      r->set_errors(s.errors);
+      r->set_p50_us(s.p50_us);
+      r->set_p99_us(s.p99_us);
+      for (std::size_t b = 0; b < RpcStats::kBuckets; ++b) {
+        r->add_histogram_bounds_us(static_cast<double>(1ull << b));
+        r->add_histogram_counts(s.histogram[b]);
+      }
     }
-  }
-  response->set_parts_stored(parts_.store().count());
-  return finish(ctx, stats_, "GetServerInfo", t0, grpc::Status::OK);
+    response->set_parts_stored(parts_.store().count());
+    return grpc::Status(grpc::Status::OK);
+  });
 }
 
 }  // namespace gk::server

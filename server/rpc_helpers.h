@@ -4,8 +4,12 @@
 #include "server/rpc_stats.h"
 
 #include <grpcpp/grpcpp.h>
+#include <spdlog/spdlog.h>
 
+#include <atomic>
 #include <chrono>
+#include <exception>
+#include <string>
 
 namespace gk::server {
 
@@ -24,6 +28,36 @@ inline grpc::ServerUnaryReactor* finish(grpc::CallbackServerContext* ctx, RpcSta
   auto* reactor = ctx->DefaultReactor();
   reactor->Finish(status);
   return reactor;
+}
+
+// A request id for the log, unique within this process.
+inline std::string next_request_id() {
+  static std::atomic<unsigned long long> counter{0};
+  return "req-" + std::to_string(++counter);
+}
+
+// Runs a handler's body; whatever it throws is logged with a request id and answered INTERNAL
+// (never a terminate, never UNIMPLEMENTED).
+template <typename Body>
+grpc::Status guarded_status(const char* method, Body&& body) {
+  try {
+    return body();
+  } catch (const std::exception& e) {
+    const std::string id = next_request_id();
+    spdlog::error("{} {}: unexpected exception: {}", method, id, e.what());
+    return {grpc::StatusCode::INTERNAL, std::string("internal error (") + id + "): " + e.what()};
+  } catch (...) {
+    const std::string id = next_request_id();
+    spdlog::error("{} {}: unexpected exception of unknown type", method, id);
+    return {grpc::StatusCode::INTERNAL, "internal error (" + id + ")"};
+  }
+}
+
+// A unary call: its body returns the status; timing, finishing and the exception guard are here.
+template <typename Body>
+grpc::ServerUnaryReactor* unary(grpc::CallbackServerContext* ctx, RpcStats& stats, const char* method, Body&& body) {
+  const auto t0 = Clock::now();
+  return finish(ctx, stats, method, t0, guarded_status(method, std::forward<Body>(body)));
 }
 
 }  // namespace gk::server

@@ -177,6 +177,11 @@ void AuditJob::fail(const Error& error) {
   });
 }
 
+void AuditJob::fail_unexpectedly(const std::string& message) {
+  if (snapshot().status != AuditStatus::kRunning) return;
+  fail(Error{ErrorCode::kInternal, "audit", message});
+}
+
 std::vector<AuditedObject> AuditJob::objects() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return objects_;

@@ -119,6 +119,8 @@ class AuditJob {
   // on_end sees the final state before it is published (the daemon archives it there).
   void run(PartRegistry& parts, std::function<void(const AuditSnapshot&)> on_end = {});
   void cancel() { cancelled_ = true; }
+  // The job's run threw: it ends FAILED with this message (unless it had ended already).
+  void fail_unexpectedly(const std::string& message);
   AuditSnapshot snapshot() const;
   // Waits until the progress changes (or timeout); returns the snapshot.
   AuditSnapshot wait_for_change(unsigned long long seen_done, AuditStatus seen_status, std::chrono::milliseconds timeout) const;

@@ -23,7 +23,7 @@ class DragReactor final : public grpc::ServerBidiReactor<pb::MoveObjectRequest, 
     if (!ok) return Finish(grpc::Status::OK);  // the client is done dragging
     const auto t0 = Clock::now();
     reply_.Clear();
-    const grpc::Status s = service_.move(request_, &reply_, &session_);
+    const grpc::Status s = guarded_status("DragObject", [&] { return service_.move(request_, &reply_, &session_); });
     service_.stats().record("DragObject.move", us_since(t0), !s.ok());
     if (!s.ok()) return Finish(s);
     StartWrite(&reply_);
@@ -118,11 +118,12 @@ class WatchReactor final : public grpc::ServerWriteReactor<pb::AuditProgress> {
 
 grpc::ServerUnaryReactor* GatekeeperService::CreateScene(grpc::CallbackServerContext* ctx, const pb::CreateSceneRequest* request,
                                                          pb::SceneInfo* response) {
-  const auto t0 = Clock::now();
-  auto scene = scenes_.create(request->name());
-  if (!scene.ok()) return finish(ctx, stats_, "CreateScene", t0, to_status(scene.error()));
-  scene_to_proto(scene.value(), response);
-  return finish(ctx, stats_, "CreateScene", t0, grpc::Status::OK);
+  return unary(ctx, stats_, "CreateScene", [&]() -> grpc::Status {
+    auto scene = scenes_.create(request->name());
+    if (!scene.ok()) return grpc::Status(to_status(scene.error()));
+    scene_to_proto(scene.value(), response);
+    return grpc::Status(grpc::Status::OK);
+  });
 }
 
 grpc::Status GatekeeperService::move(const pb::MoveObjectRequest& request, pb::MoveResult* response, DragSession* drag) {
@@ -170,48 +171,51 @@ grpc::Status GatekeeperService::contacts(const std::string& scene_id, const std:
 grpc::ServerUnaryReactor* GatekeeperService::PutObject(grpc::CallbackServerContext* ctx, const pb::PutObjectRequest* request,
                                                        pb::MoveResult* response) {
   const auto t0 = Clock::now();
-  const pb::SceneObject& in = request->object();
-  auto part = parts_.store().get(in.part_id());
-  if (!part.ok()) return finish(ctx, stats_, "PutObject", t0, to_status(Error{part.error().code, "object.part_id", part.error().message}));
-  auto pose = to_stored_pose(in.pose(), "object.pose");
-  if (!pose.ok()) return finish(ctx, stats_, "PutObject", t0, to_status(pose.error()));
-  if (!std::isfinite(request->clearance_mm()) || request->clearance_mm() < 0.0)
-    return finish(ctx, stats_, "PutObject", t0, {grpc::StatusCode::INVALID_ARGUMENT, "clearance_mm: must be a finite distance >= 0"});
-  auto stored = scenes_.put(request->scene_id(), {in.object_id(), in.name(), in.category(), in.part_id(), pose.value(), in.group()});
-  if (!stored.ok()) return finish(ctx, stats_, "PutObject", t0, to_status(stored.error()));
-  // Stored once; then the new object's contacts, as a move would answer them.
-  return finish(ctx, stats_, "PutObject", t0,
-                contacts(request->scene_id(), stored.value().id, request->clearance_mm(), pose.value().transform(), nullptr, t0, response));
+  return unary(ctx, stats_, "PutObject", [&]() -> grpc::Status {
+    const pb::SceneObject& in = request->object();
+    auto part = parts_.store().get(in.part_id());
+    if (!part.ok()) return to_status(Error{part.error().code, "object.part_id", part.error().message});
+    auto pose = to_stored_pose(in.pose(), "object.pose");
+    if (!pose.ok()) return to_status(pose.error());
+    if (!std::isfinite(request->clearance_mm()) || request->clearance_mm() < 0.0)
+      return {grpc::StatusCode::INVALID_ARGUMENT, "clearance_mm: must be a finite distance >= 0"};
+    auto stored = scenes_.put(request->scene_id(), {in.object_id(), in.name(), in.category(), in.part_id(), pose.value(), in.group()});
+    if (!stored.ok()) return to_status(stored.error());
+    // Stored once; then the new object's contacts, as a move would answer them.
+    return contacts(request->scene_id(), stored.value().id, request->clearance_mm(), pose.value().transform(), nullptr, t0, response);
+  });
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::PutObjects(grpc::CallbackServerContext* ctx, const pb::PutObjectsRequest* request,
                                                         pb::PutObjectsResponse* response) {
-  const auto t0 = Clock::now();
-  // Every object is checked before anything is stored, so a bad one leaves the scene as it was.
-  std::vector<SceneObjectRecord> objects;
-  std::set<std::string> known_parts;
-  for (int i = 0; i < request->objects_size(); ++i) {
-    const pb::SceneObject& in = request->objects(i);
-    const std::string field = "objects[" + std::to_string(i) + "]";
-    if (!known_parts.count(in.part_id())) {
-      auto part = parts_.store().get(in.part_id());
-      if (!part.ok()) return finish(ctx, stats_, "PutObjects", t0, to_status(Error{part.error().code, field + ".part_id", part.error().message}));
-      known_parts.insert(in.part_id());
+  return unary(ctx, stats_, "PutObjects", [&]() -> grpc::Status {
+    // Every object is checked before anything is stored, so a bad one leaves the scene as it was.
+    std::vector<SceneObjectRecord> objects;
+    std::set<std::string> known_parts;
+    for (int i = 0; i < request->objects_size(); ++i) {
+      const pb::SceneObject& in = request->objects(i);
+      const std::string field = "objects[" + std::to_string(i) + "]";
+      if (!known_parts.count(in.part_id())) {
+        auto part = parts_.store().get(in.part_id());
+        if (!part.ok()) return grpc::Status(to_status(Error{part.error().code, field + ".part_id", part.error().message}));
+        known_parts.insert(in.part_id());
+      }
+      auto pose = to_stored_pose(in.pose(), field + ".pose");
+      if (!pose.ok()) return grpc::Status(to_status(pose.error()));
+      objects.push_back({in.object_id(), in.name(), in.category(), in.part_id(), pose.value(), in.group()});
     }
-    auto pose = to_stored_pose(in.pose(), field + ".pose");
-    if (!pose.ok()) return finish(ctx, stats_, "PutObjects", t0, to_status(pose.error()));
-    objects.push_back({in.object_id(), in.name(), in.category(), in.part_id(), pose.value(), in.group()});
-  }
-  auto stored = scenes_.put_many(request->scene_id(), std::move(objects));
-  if (!stored.ok()) return finish(ctx, stats_, "PutObjects", t0, to_status(stored.error()));
-  for (const SceneObjectRecord& o : stored.value()) response->add_object_ids(o.id);
-  return finish(ctx, stats_, "PutObjects", t0, grpc::Status::OK);
+    auto stored = scenes_.put_many(request->scene_id(), std::move(objects));
+    if (!stored.ok()) return grpc::Status(to_status(stored.error()));
+    for (const SceneObjectRecord& o : stored.value()) response->add_object_ids(o.id);
+    return grpc::Status(grpc::Status::OK);
+  });
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::MoveObject(grpc::CallbackServerContext* ctx, const pb::MoveObjectRequest* request,
                                                         pb::MoveResult* response) {
-  const auto t0 = Clock::now();
-  return finish(ctx, stats_, "MoveObject", t0, move(*request, response));
+  return unary(ctx, stats_, "MoveObject", [&]() -> grpc::Status {
+    return grpc::Status(move(*request, response));
+  });
 }
 
 grpc::ServerBidiReactor<pb::MoveObjectRequest, pb::MoveResult>* GatekeeperService::DragObject(grpc::CallbackServerContext*) {
@@ -220,20 +224,22 @@ grpc::ServerBidiReactor<pb::MoveObjectRequest, pb::MoveResult>* GatekeeperServic
 
 grpc::ServerUnaryReactor* GatekeeperService::DeleteObject(grpc::CallbackServerContext* ctx, const pb::DeleteObjectRequest* request,
                                                           pb::SceneInfo* response) {
-  const auto t0 = Clock::now();
-  auto scene = scenes_.remove(request->scene_id(), request->object_id());
-  if (!scene.ok()) return finish(ctx, stats_, "DeleteObject", t0, to_status(scene.error()));
-  scene_to_proto(scene.value(), response);
-  return finish(ctx, stats_, "DeleteObject", t0, grpc::Status::OK);
+  return unary(ctx, stats_, "DeleteObject", [&]() -> grpc::Status {
+    auto scene = scenes_.remove(request->scene_id(), request->object_id());
+    if (!scene.ok()) return grpc::Status(to_status(scene.error()));
+    scene_to_proto(scene.value(), response);
+    return grpc::Status(grpc::Status::OK);
+  });
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::GetScene(grpc::CallbackServerContext* ctx, const pb::GetSceneRequest* request,
                                                       pb::SceneInfo* response) {
-  const auto t0 = Clock::now();
-  auto scene = scenes_.get(request->scene_id());
-  if (!scene.ok()) return finish(ctx, stats_, "GetScene", t0, to_status(scene.error()));
-  scene_to_proto(scene.value(), response);
-  return finish(ctx, stats_, "GetScene", t0, grpc::Status::OK);
+  return unary(ctx, stats_, "GetScene", [&]() -> grpc::Status {
+    auto scene = scenes_.get(request->scene_id());
+    if (!scene.ok()) return grpc::Status(to_status(scene.error()));
+    scene_to_proto(scene.value(), response);
+    return grpc::Status(grpc::Status::OK);
+  });
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::StartAudit(grpc::CallbackServerContext* ctx, const pb::StartAuditRequest* request,
@@ -269,11 +275,15 @@ grpc::ServerUnaryReactor* GatekeeperService::StartAudit(grpc::CallbackServerCont
   PartRegistry* parts = &parts_;
   AuditArchive* archive = archive_;
   if (!pool_.try_submit([job, id, parts, archive] {
-        job->run(*parts, [&](const AuditSnapshot& final_state) {
-          if (!archive) return;
-          auto saved = archive->save(id, *job, final_state);
-          if (!saved.ok()) spdlog::warn("audit {} not archived: {}", id, saved.error().to_string());
+        const grpc::Status ran = guarded_status("StartAudit", [&] {
+          job->run(*parts, [&](const AuditSnapshot& final_state) {
+            if (!archive) return;
+            auto saved = archive->save(id, *job, final_state);
+            if (!saved.ok()) spdlog::warn("audit {} not archived: {}", id, saved.error().to_string());
+          });
+          return grpc::Status::OK;
         });
+        if (!ran.ok()) job->fail_unexpectedly(ran.error_message());
       })) {
     audits_.remove(id);
     return finish(ctx, stats_, "StartAudit", t0, {grpc::StatusCode::RESOURCE_EXHAUSTED, "audit queue full: retry later"});
@@ -297,24 +307,26 @@ grpc::ServerWriteReactor<pb::AuditProgress>* GatekeeperService::WatchAudit(grpc:
 
 grpc::ServerUnaryReactor* GatekeeperService::CancelAudit(grpc::CallbackServerContext* ctx, const pb::CancelAuditRequest* request,
                                                          pb::AuditProgress* response) {
-  const auto t0 = Clock::now();
-  auto job = audits_.get(request->job_id());
-  if (!job.ok()) return finish(ctx, stats_, "CancelAudit", t0, to_status(job.error()));
-  job.value()->cancel();
-  progress_to_proto(request->job_id(), job.value()->snapshot(), response);
-  return finish(ctx, stats_, "CancelAudit", t0, grpc::Status::OK);
+  return unary(ctx, stats_, "CancelAudit", [&]() -> grpc::Status {
+    auto job = audits_.get(request->job_id());
+    if (!job.ok()) return grpc::Status(to_status(job.error()));
+    job.value()->cancel();
+    progress_to_proto(request->job_id(), job.value()->snapshot(), response);
+    return grpc::Status(grpc::Status::OK);
+  });
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::GetAuditReport(grpc::CallbackServerContext* ctx,
                                                             const pb::GetAuditReportRequest* request, pb::AuditReport* response) {
-  const auto t0 = Clock::now();
-  auto job = audits_.get(request->job_id());
-  if (!job.ok()) return finish(ctx, stats_, "GetAuditReport", t0, to_status(job.error()));
-  const AuditSnapshot snapshot = job.value()->snapshot();
-  progress_to_proto(request->job_id(), snapshot, response->mutable_progress());
-  report_to_proto(snapshot, response);
-  if (request->html()) response->set_html(audit_report_page(*response, job.value()->scene().name, job.value()->objects()));
-  return finish(ctx, stats_, "GetAuditReport", t0, grpc::Status::OK);
+  return unary(ctx, stats_, "GetAuditReport", [&]() -> grpc::Status {
+    auto job = audits_.get(request->job_id());
+    if (!job.ok()) return grpc::Status(to_status(job.error()));
+    const AuditSnapshot snapshot = job.value()->snapshot();
+    progress_to_proto(request->job_id(), snapshot, response->mutable_progress());
+    report_to_proto(snapshot, response);
+    if (request->html()) response->set_html(audit_report_page(*response, job.value()->scene().name, job.value()->objects()));
+    return grpc::Status(grpc::Status::OK);
+  });
 }
 
 }  // namespace gk::server
