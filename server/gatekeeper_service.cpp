@@ -307,6 +307,7 @@ grpc::ServerUnaryReactor* GatekeeperService::SetMachineState(grpc::CallbackServe
 grpc::ServerUnaryReactor* GatekeeperService::PutMachineModel(grpc::CallbackServerContext* ctx,
                                                              const pb::PutMachineModelRequest* request, pb::MachineInfo* response) {
   return unary(ctx, stats_, "PutMachineModel", [&]() -> grpc::Status {
+    if (auto bad = check_id(request->machine_id(), "machine_id"); !bad.ok()) return to_status(bad.error());
     auto put = machines_.put_model(request->machine_id(), request->model_toml());
     if (!put.ok()) return grpc::Status(to_status(put.error()));
     return grpc::Status(machine_info(request->machine_id(), response));

@@ -1,5 +1,8 @@
 #include "server/proto_convert.h"
 
+#include "kernel/tolerances.h"
+
+#include <cctype>
 #include <cmath>
 
 namespace gk::server {
@@ -100,9 +103,31 @@ Result<RigidTransform> to_pose(const pb::Pose& in, const std::string& field) {
   const Vec3 axis(in.rotation_axis().x_mm(), in.rotation_axis().y_mm(), in.rotation_axis().z_mm());
   if (!t.allFinite()) return invalid_argument(field + ".translation", "must be finite");
   if (!std::isfinite(in.rotation_deg())) return invalid_argument(field + ".rotation_deg", "must be finite");
+  if (t.cwiseAbs().maxCoeff() > tolerances::kMaxCoordinateMm)
+    return invalid_argument(field + ".translation", "beyond 1e7 mm from the origin");
   if (in.rotation_deg() == 0.0) return RigidTransform::from_translation(t);
-  if (!axis.allFinite() || !(axis.norm() > 0.0)) return invalid_argument(field + ".rotation_axis", "must be a non-zero vector");
-  return RigidTransform::from_axis_angle(axis, in.rotation_deg() * kPi / 180.0, t);
+  const double largest = axis.allFinite() ? axis.cwiseAbs().maxCoeff() : 0.0;
+  if (!(largest > 0.0)) return invalid_argument(field + ".rotation_axis", "must be a finite, non-zero vector");
+  // Scaled before normalising: (1e200, 0, 1) squared would overflow to infinity.
+  const RigidTransform pose = RigidTransform::from_axis_angle(axis / largest, in.rotation_deg() * kPi / 180.0, t);
+  if (!pose.is_rigid()) return invalid_argument(field + ".rotation_axis", "does not give a rigid rotation");
+  return pose;
+}
+
+Result<bool> check_id(const std::string& id, const std::string& field) {
+  if (id.empty() || id.size() > kMaxIdLength)
+    return invalid_argument(field, "must be 1 to " + std::to_string(kMaxIdLength) + " characters");
+  for (char c : id)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.' || c == ':'))
+      return invalid_argument(field, "may hold only letters, digits and - _ . :");
+  return true;
+}
+
+Result<bool> check_label(const std::string& text, const std::string& field) {
+  if (text.size() > kMaxLabelLength) return invalid_argument(field, "longer than " + std::to_string(kMaxLabelLength) + " bytes");
+  for (char c : text)
+    if (static_cast<unsigned char>(c) < 0x20) return invalid_argument(field, "holds a control character (NUL, newline, ...)");
+  return true;
 }
 
 pb::Verdict to_proto(Verdict v) {
@@ -262,7 +287,9 @@ Result<StoredPose> to_stored_pose(const pb::Pose& in, const std::string& field) 
   StoredPose p;
   p.translation = Vec3(in.translation().x_mm(), in.translation().y_mm(), in.translation().z_mm());
   if (in.rotation_deg() != 0.0) {
-    p.axis = Vec3(in.rotation_axis().x_mm(), in.rotation_axis().y_mm(), in.rotation_axis().z_mm());
+    // Stored as the rotation it was checked as (scaled so that its largest component is 1).
+    const Vec3 axis(in.rotation_axis().x_mm(), in.rotation_axis().y_mm(), in.rotation_axis().z_mm());
+    p.axis = axis / axis.cwiseAbs().maxCoeff();
     p.angle_deg = in.rotation_deg();
   }
   return p;

@@ -26,6 +26,14 @@ void to_proto(const p4::MachineState& state, pb::MachineState* out);
 void to_proto(const p4::BendStep& step, pb::Step* out);
 void to_proto(const Vec3& v, pb::Vec3* out);
 void to_proto(const PartRecord& record, pb::PartInfo* out);
+// Ids a client names (objects, machines): 1-128 of [A-Za-z0-9-_.:], so that nothing stored is
+// truncated or ambiguous (a NUL byte ended an id in storage). Names, categories and groups: at most
+// 256 bytes, no control characters.
+inline constexpr std::size_t kMaxIdLength = 128;
+inline constexpr std::size_t kMaxLabelLength = 256;
+Result<bool> check_id(const std::string& id, const std::string& field);
+Result<bool> check_label(const std::string& text, const std::string& field);
+
 pb::Verdict to_proto(Verdict v);
 pb::InconclusiveReason to_proto(InconclusiveReason r);
 Verdict from_proto(pb::Verdict v);

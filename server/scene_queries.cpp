@@ -354,11 +354,6 @@ std::vector<std::string> AuditJob::answer_options() const {
 void AuditJobs::restore(const std::string& id, std::shared_ptr<AuditJob> job) {
   std::lock_guard<std::mutex> lock(mutex_);
   jobs_[id] = std::move(job);
-  const std::string prefix = "audit-";
-  if (id.compare(0, prefix.size(), prefix) == 0) {
-    const unsigned long long n = std::strtoull(id.c_str() + prefix.size(), nullptr, 10);
-    counter_ = std::max(counter_, n);
-  }
 }
 
 void AuditJobs::remove(const std::string& id) {
@@ -368,7 +363,9 @@ void AuditJobs::remove(const std::string& id) {
 
 std::string AuditJobs::add(std::shared_ptr<AuditJob> job) {
   std::lock_guard<std::mutex> lock(mutex_);
-  const std::string id = "audit-" + std::to_string(++counter_);
+  // Unique across restarts too (a job that was running when the daemon stopped is not archived,
+  // so a counter alone would hand its id to the next job): the daemon's start time, then a count.
+  const std::string id = "audit-" + std::to_string(epoch_ms_) + "-" + std::to_string(++counter_);
   jobs_[id] = std::move(job);
   return id;
 }

@@ -156,7 +156,8 @@ class AuditJob {
 class AuditJobs {
  public:
   std::string add(std::shared_ptr<AuditJob> job);
-  // A job restored from the archive under its old id; new ids continue after the largest.
+  // A job restored from the archive under its old id (new ids never repeat an old one: they carry
+  // this daemon's start time).
   void restore(const std::string& id, std::shared_ptr<AuditJob> job);
   void remove(const std::string& id);
   Result<std::shared_ptr<AuditJob>> get(const std::string& id) const;
@@ -165,6 +166,8 @@ class AuditJobs {
   mutable std::mutex mutex_;
   std::map<std::string, std::shared_ptr<AuditJob>> jobs_;
   unsigned long long counter_ = 0;
+  long long epoch_ms_ = std::chrono::duration_cast<std::chrono::milliseconds>(
+                            std::chrono::system_clock::now().time_since_epoch()).count();
 };
 
 }  // namespace gk::server

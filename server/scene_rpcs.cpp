@@ -41,6 +41,16 @@ class DragReactor final : public grpc::ServerBidiReactor<pb::MoveObjectRequest, 
   DragSession session_;
 };
 
+// A client-named object id (empty: assigned), and its labels.
+Result<bool> check_object(const pb::SceneObject& in, const std::string& field) {
+  if (!in.object_id().empty())
+    if (auto bad = check_id(in.object_id(), field + ".object_id"); !bad.ok()) return bad;
+  for (const auto& [text, name] : {std::pair<const std::string*, const char*>{&in.name(), ".name"}, {&in.category(), ".category"},
+                                   {&in.group(), ".group"}})
+    if (auto bad = check_label(*text, field + name); !bad.ok()) return bad;
+  return true;
+}
+
 // Streams an audit's progress until it ends; the job itself runs whether or not anyone watches.
 // Driven by the job's change notifications: no thread of its own. A change that arrives while a
 // write is in flight is coalesced into one write of the latest state when that write completes.
@@ -119,6 +129,7 @@ class WatchReactor final : public grpc::ServerWriteReactor<pb::AuditProgress> {
 grpc::ServerUnaryReactor* GatekeeperService::CreateScene(grpc::CallbackServerContext* ctx, const pb::CreateSceneRequest* request,
                                                          pb::SceneInfo* response) {
   return unary(ctx, stats_, "CreateScene", [&]() -> grpc::Status {
+    if (auto bad = check_label(request->name(), "name"); !bad.ok()) return to_status(bad.error());
     auto scene = scenes_.create(request->name());
     if (!scene.ok()) return grpc::Status(to_status(scene.error()));
     scene_to_proto(scene.value(), response);
@@ -173,6 +184,7 @@ grpc::ServerUnaryReactor* GatekeeperService::PutObject(grpc::CallbackServerConte
   const auto t0 = Clock::now();
   return unary(ctx, stats_, "PutObject", [&]() -> grpc::Status {
     const pb::SceneObject& in = request->object();
+    if (auto bad = check_object(in, "object"); !bad.ok()) return to_status(bad.error());
     auto part = parts_.store().get(in.part_id());
     if (!part.ok()) return to_status(Error{part.error().code, "object.part_id", part.error().message});
     auto pose = to_stored_pose(in.pose(), "object.pose");
@@ -195,6 +207,7 @@ grpc::ServerUnaryReactor* GatekeeperService::PutObjects(grpc::CallbackServerCont
     for (int i = 0; i < request->objects_size(); ++i) {
       const pb::SceneObject& in = request->objects(i);
       const std::string field = "objects[" + std::to_string(i) + "]";
+      if (auto bad = check_object(in, field); !bad.ok()) return to_status(bad.error());
       if (!known_parts.count(in.part_id())) {
         auto part = parts_.store().get(in.part_id());
         if (!part.ok()) return grpc::Status(to_status(Error{part.error().code, field + ".part_id", part.error().message}));

@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <csignal>
+#include <set>
 #include <thread>
 #include <vector>
 
@@ -105,6 +107,87 @@ TEST(HostileClientE2E, ThreeHundredWatchersOfARunningAuditNeitherKillItNorGoUnan
   EXPECT_EQ(done + refused, 300) << other << " watchers ended otherwise";
   EXPECT_GE(done.load(), 64);
   expect_alive(*stub);
+}
+
+// Ids that storage would truncate or cannot hold are refused naming the field, and a refused call
+// stores nothing (issue: hardened service §2).
+TEST(HostileClientE2E, MalformedIdsAndPosesAreRefusedAndNothingIsStored) {
+  const std::string dir = testing::temp_dir("hostile-ids");
+  std::string scene_id;
+  {
+    Daemon daemon(dir);
+    auto stub = daemon.stub();
+    const std::string box = testing::upload_part_id(*stub, testing::box_obj(0, 0, 0, 10, 10, 10), "obj");
+    grpc::ClientContext cctx;
+    pb::SceneInfo scene;
+    ASSERT_TRUE(stub->CreateScene(&cctx, pb::CreateSceneRequest(), &scene).ok());
+    scene_id = scene.scene_id();
+    auto put = [&](const std::string& id, double axis_x, const std::string& name = "box") {
+      pb::PutObjectRequest req;
+      req.set_scene_id(scene_id);
+      req.mutable_object()->set_object_id(id);
+      req.mutable_object()->set_part_id(box);
+      req.mutable_object()->set_name(name);
+      req.mutable_object()->mutable_pose()->mutable_rotation_axis()->set_x_mm(axis_x);
+      req.mutable_object()->mutable_pose()->mutable_rotation_axis()->set_z_mm(1.0);
+      req.mutable_object()->mutable_pose()->set_rotation_deg(30.0);
+      grpc::ClientContext ctx;
+      pb::MoveResult result;
+      return stub->PutObject(&ctx, req, &result);
+    };
+    for (const std::string& bad : {std::string("nul\0a", 5), std::string(200, 'x'), std::string("a/b"), std::string("../x")}) {
+      const grpc::Status s = put(bad, 0.0);
+      EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << bad.size();
+      EXPECT_NE(s.error_message().find("object_id"), std::string::npos) << s.error_message();
+    }
+    const grpc::Status huge_axis = put("tilted", 1e200);
+    EXPECT_EQ(huge_axis.error_code(), grpc::StatusCode::OK) << huge_axis.error_message();  // a valid axis, scaled safely
+    const grpc::Status name = put("named", 0.0, std::string("a\0b", 3));
+    EXPECT_EQ(name.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+    const grpc::Status good = put("good-id_1.2:3", 0.0);
+    EXPECT_TRUE(good.ok()) << good.error_message();
+    pb::PutMachineModelRequest model;
+    model.set_machine_id(std::string(250, 'm'));
+    model.set_model_toml("name = 'x'");
+    grpc::ClientContext mctx;
+    pb::MachineInfo info;
+    const grpc::Status long_id = stub->PutMachineModel(&mctx, model, &info);
+    EXPECT_EQ(long_id.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+    EXPECT_NE(long_id.error_message().find("machine_id"), std::string::npos) << long_id.error_message();
+    expect_alive(*stub);
+  }
+  // After a restart exactly the accepted objects are there, and an audit of them runs.
+  Daemon daemon(dir);
+  auto stub = daemon.stub();
+  grpc::ClientContext gctx;
+  pb::GetSceneRequest get;
+  get.set_scene_id(scene_id);
+  pb::SceneInfo scene;
+  ASSERT_TRUE(stub->GetScene(&gctx, get, &scene).ok());
+  std::set<std::string> ids;
+  for (const pb::SceneObject& o : scene.objects()) ids.insert(o.object_id());
+  EXPECT_EQ(ids, (std::set<std::string>{"good-id_1.2:3", "tilted"}));
+}
+
+// A job id never names two jobs, even across a restart that lost a running job.
+TEST(HostileClientE2E, AuditIdsAreUniqueAcrossRestarts) {
+  const std::string dir = testing::temp_dir("hostile-audit-ids");
+  std::set<std::string> seen;
+  std::string scene;
+  for (int run = 0; run < 2; ++run) {
+    Daemon daemon(dir);
+    auto stub = daemon.stub();
+    if (scene.empty()) scene = robot_row(*stub, 4);
+    for (int k = 0; k < 2; ++k) {
+      pb::StartAuditRequest start;
+      start.set_scene_id(scene);
+      pb::AuditJob job;
+      grpc::ClientContext ctx;
+      ASSERT_TRUE(stub->StartAudit(&ctx, start, &job).ok());
+      EXPECT_TRUE(seen.insert(job.job_id()).second) << job.job_id() << " given twice";
+    }
+    daemon.stop(SIGKILL);  // running jobs are lost, not archived
+  }
 }
 
 }  // namespace
