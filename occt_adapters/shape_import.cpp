@@ -15,6 +15,8 @@
 #include <atomic>
 #include <cctype>
 #include <filesystem>
+#include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <unistd.h>
 
@@ -51,7 +53,32 @@ Result<Shape> read_with_xs_reader(const std::string& path, const char* kind) {
   return wrap(shape);
 }
 
+// OCCT's BREP reader allocates each table ("Locations 2000000000") before reading it: an 84-byte
+// file kept it busy for 12 s. Every table entry takes at least one byte, so a count above the
+// file's size is refused before OCCT sees it.
+Result<bool> check_brep_tables(const std::string& path) {
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec) return invalid_argument(path, "cannot read the file");
+  std::ifstream in(path);
+  std::string line;
+  static const char* const tables[] = {"Locations", "Curve2ds", "Curves", "Polygon3D", "PolygonOnTriangulations",
+                                       "Surfaces", "Triangulations", "TShapes"};
+  while (std::getline(in, line)) {
+    for (const char* table : tables) {
+      const std::size_t n = std::strlen(table);
+      if (line.compare(0, n, table) != 0 || line.size() <= n || line[n] != ' ') continue;
+      const long long count = std::atoll(line.c_str() + n + 1);
+      if (count < 0 || static_cast<unsigned long long>(count) > size)
+        return invalid_argument(path, std::string("declares ") + std::to_string(count) + " " + table + " in a file of " +
+                                          std::to_string(size) + " bytes");
+    }
+  }
+  return true;
+}
+
 Result<Shape> read_brep(const std::string& path) {
+  if (auto checked = check_brep_tables(path); !checked.ok()) return checked.error();
   TopoDS_Shape shape;
   bool ok = false;
   auto ran = guarded(path, "reading BREP", [&] {

@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
+
 namespace gk {
 namespace {
 
@@ -33,6 +35,26 @@ TEST(TessellationClosure, EverySolidOfTheSharedCadPartsIsAClosedBody) {
       EXPECT_EQ(meshed.value().mesh.body_seeds().size(), c.solids);
       EXPECT_TRUE(r.zero_area_triangles.empty());
     }
+  }
+}
+
+}  // namespace
+}  // namespace gk
+
+namespace gk {
+namespace {
+
+// A few bytes declaring two billion table entries kept OCCT's BREP reader busy for 12 s: refused
+// before it runs (issue: hardened service §3).
+TEST(BrepImport, AbsurdTableCountsAreRefusedAtOnce) {
+  const std::string header = "DBRep_DrawableShape\n\nCASCADE Topology V1, (c) Matra-Datavision\n";
+  for (const char* table : {"Locations 2000000000", "Curves 999999999", "TShapes 123456789"}) {
+    const auto t0 = std::chrono::steady_clock::now();
+    auto read = occt::read_shape_bytes(header + table + "\n", "brep");
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ASSERT_FALSE(read.ok());
+    EXPECT_NE(read.error().message.find("declares"), std::string::npos) << read.error().to_string();
+    EXPECT_LT(s, 1.0);
   }
 }
 
