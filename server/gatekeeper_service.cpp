@@ -116,7 +116,8 @@ class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> 
 GatekeeperService::GatekeeperService(MachineRegistry& machines, PartRegistry& parts, SceneStore& scenes, AuditArchive* archive,
                                      ServiceOptions options)
     : machines_(machines), parts_(parts), scenes_(scenes), archive_(archive), options_(options),
-      pool_(options.workers, options.max_queued) {
+      pool_(options.workers, options.max_queued),
+      audit_pool_(options.audit_jobs, options.audit_queue) {
   if (archive_) {
     std::size_t unreadable = 0;
     for (auto& [id, job] : archive_->load_all(&unreadable)) audits_.restore(id, std::move(job));
@@ -194,6 +195,13 @@ grpc::Status GatekeeperService::validate_one_unguarded(const pb::ValidateStepReq
 grpc::ServerUnaryReactor* GatekeeperService::ValidateStep(grpc::CallbackServerContext* ctx,
                                                           const pb::ValidateStepRequest* request,
                                                           pb::ValidateStepResponse* response) {
+  // Admission: a bounded number at once, the rest refused at once rather than queued.
+  struct Admitted {
+    std::atomic<int>& n;
+    ~Admitted() { --n; }
+  } admitted{validations_in_flight_};
+  if (++validations_in_flight_ > options_.max_validations_in_flight)
+    return finish(ctx, stats_, "ValidateStep", Clock::now(), {grpc::StatusCode::RESOURCE_EXHAUSTED, "too many validations at once: retry later"});
   return unary(ctx, stats_, "ValidateStep", [&]() -> grpc::Status {
     if (past_deadline(ctx)) return grpc::Status({grpc::StatusCode::DEADLINE_EXCEEDED, "deadline passed"});
     return grpc::Status(validate_one(*request, nullptr, "", response));
@@ -203,6 +211,12 @@ grpc::ServerUnaryReactor* GatekeeperService::ValidateStep(grpc::CallbackServerCo
 grpc::ServerUnaryReactor* GatekeeperService::ValidateSteps(grpc::CallbackServerContext* ctx,
                                                            const pb::ValidateStepsRequest* request,
                                                            pb::ValidateStepsResponse* response) {
+  struct Admitted {
+    std::atomic<int>& n;
+    ~Admitted() { --n; }
+  } admitted{validations_in_flight_};
+  if (++validations_in_flight_ > options_.max_validations_in_flight)
+    return finish(ctx, stats_, "ValidateSteps", Clock::now(), {grpc::StatusCode::RESOURCE_EXHAUSTED, "too many validations at once: retry later"});
   return unary(ctx, stats_, "ValidateSteps", [&]() -> grpc::Status {
     response->set_first_failure(-1);
     for (int i = 0; i < request->steps_size(); ++i) {

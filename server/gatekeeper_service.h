@@ -13,6 +13,7 @@
 #include "server/scene_store.h"
 #include "server/work_pool.h"
 
+#include <atomic>
 #include <chrono>
 #include <memory>
 #include <string>
@@ -25,6 +26,12 @@ struct ServiceOptions {
   int workers = 2;                 // clearance and upload-finishing threads
   std::size_t max_queued = 64;     // beyond this, RESOURCE_EXHAUSTED
   int audit_threads = 2;           // threads of one audit job (its tiles, then its pairs)
+  // Audit jobs run on their own pool, so that a running audit never delays a clearance query.
+  int audit_jobs = 1;              // audits run at once
+  std::size_t audit_queue = 16;    // audits waiting; beyond, RESOURCE_EXHAUSTED
+  // ValidateStep(s) run on the callback threads (a step is ~0.2 ms); beyond this many at once the
+  // call is answered RESOURCE_EXHAUSTED instead of queueing behind the others.
+  int max_validations_in_flight = 64;
   std::string version = "0.1.0";
 };
 
@@ -35,7 +42,10 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
                     ServiceOptions options);
   ~GatekeeperService() override;
 
-  void stop_work() { pool_.stop(); }
+  void stop_work() {
+    pool_.stop();
+    audit_pool_.stop();
+  }
   RpcStats& stats() { return stats_; }
   PartRegistry& parts() { return parts_; }
   WorkPool& pool() { return pool_; }
@@ -109,6 +119,8 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
   ServiceOptions options_;
   RpcStats stats_;
   WorkPool pool_;
+  WorkPool audit_pool_;
+  std::atomic<int> validations_in_flight_{0};
 };
 
 }  // namespace gk::server

@@ -1,7 +1,7 @@
 // gatekeeperd: the physics gatekeeper's gRPC daemon.
 //
 //   gatekeeperd [--listen 127.0.0.1:50051] [--data-dir DIR] [--config FILE.toml] [--workers N]
-//               [--queue N] [--port-file FILE] [--log-level info]
+//               [--queue N] [--audit-jobs N] [--port-file FILE] [--log-level info]
 //
 // Starts with the embedded default P4 machine model; health (grpc.health.v1) and reflection
 // (v1alpha) are served; SIGTERM or SIGINT shut it down gracefully (health NOT_SERVING, in-flight
@@ -28,6 +28,7 @@ struct Config {
   std::string log_level = "info";
   int workers = 2;
   int queue = 64;
+  int audit_jobs = 1;
   int drain_seconds = 5;
 };
 
@@ -39,6 +40,7 @@ bool apply_config_file(const std::string& path, Config& c, const CLI::App& app) 
     if (app.count("--data-dir") == 0) c.data_dir = t["data_dir"].value_or(c.data_dir);
     if (app.count("--workers") == 0) c.workers = t["workers"].value_or(c.workers);
     if (app.count("--queue") == 0) c.queue = t["queue"].value_or(c.queue);
+    if (app.count("--audit-jobs") == 0) c.audit_jobs = t["audit_jobs"].value_or(c.audit_jobs);
     if (app.count("--log-level") == 0) c.log_level = t["log_level"].value_or(c.log_level);
     return true;
   } catch (const toml::parse_error& e) {
@@ -55,9 +57,11 @@ int main(int argc, char** argv) {
   CLI::App app{"gatekeeperd: decides, before a machine moves, whether the move is physically possible"};
   app.add_option("--listen", config.listen, "address:port to listen on (port 0: any free port)");
   app.add_option("--data-dir", config.data_dir, "where uploaded parts and their records are stored");
-  app.add_option("--config", config_file, "a TOML file with listen, data_dir, workers, queue, log_level");
+  app.add_option("--config", config_file, "a TOML file with listen, data_dir, workers, queue, audit_jobs, log_level");
   app.add_option("--workers", config.workers, "threads for clearance queries and upload finishing")->check(CLI::Range(1, 64));
   app.add_option("--queue", config.queue, "queued jobs beyond which requests get RESOURCE_EXHAUSTED")->check(CLI::Range(1, 100000));
+  app.add_option("--audit-jobs", config.audit_jobs, "audits run at once, on their own threads (a running audit never delays queries)")
+      ->check(CLI::Range(1, 16));
   app.add_option("--port-file", config.port_file, "write the bound port to this file once serving");
   app.add_option("--drain-seconds", config.drain_seconds, "on SIGTERM, how long in-flight calls may finish")
       ->check(CLI::Range(0, 600));
@@ -88,6 +92,7 @@ int main(int argc, char** argv) {
   options.workers = config.workers;
   options.audit_threads = config.workers;
   options.max_queued = static_cast<std::size_t>(config.queue);
+  options.audit_jobs = config.audit_jobs;
   auto scenes = gk::server::SceneStore::open(config.data_dir);
   if (!scenes.ok()) {
     spdlog::error("{}", scenes.error().to_string());

@@ -287,7 +287,7 @@ grpc::ServerUnaryReactor* GatekeeperService::StartAudit(grpc::CallbackServerCont
   const std::string id = audits_.add(job);
   PartRegistry* parts = &parts_;
   AuditArchive* archive = archive_;
-  if (!pool_.try_submit([job, id, parts, archive] {
+  if (!audit_pool_.try_submit([job, id, parts, archive] {
         const grpc::Status ran = guarded_status("StartAudit", [&] {
           job->run(*parts, [&](const AuditSnapshot& final_state) {
             if (!archive) return;

@@ -169,6 +169,43 @@ TEST(HostileClientE2E, MalformedIdsAndPosesAreRefusedAndNothingIsStored) {
   EXPECT_EQ(ids, (std::set<std::string>{"good-id_1.2:3", "tilted"}));
 }
 
+// Audits run on their own threads: two long audits do not hold up a clearance query (they made a
+// 1 ms query time out at 5 s when all work shared one pool).
+TEST(HostileClientE2E, RunningAuditsDoNotDelayAClearanceQuery) {
+  Daemon daemon(testing::temp_dir("hostile-pools"));
+  auto stub = daemon.stub();
+  const std::string scene = robot_row(*stub, 80);
+  std::vector<std::string> jobs;
+  for (int k = 0; k < 2; ++k) {
+    pb::StartAuditRequest start;
+    start.set_scene_id(scene);
+    start.set_clearance_mm(50.0);
+    start.set_compute_depth(true);  // slow on purpose
+    pb::AuditJob job;
+    grpc::ClientContext ctx;
+    ASSERT_TRUE(stub->StartAudit(&ctx, start, &job).ok());
+    jobs.push_back(job.job_id());
+  }
+  const std::string box = testing::upload_part_id(*stub, testing::box_obj(0, 0, 0, 10, 10, 10), "obj");
+  pb::ClearanceQueryRequest q;
+  q.mutable_a()->set_part_id(box);
+  q.mutable_b()->set_part_id(box);
+  q.mutable_b()->mutable_pose()->mutable_translation()->set_x_mm(20.0);
+  grpc::ClientContext ctx;
+  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(2));
+  pb::ClearanceQueryResponse r;
+  const grpc::Status s = stub->ClearanceQuery(&ctx, q, &r);
+  EXPECT_TRUE(s.ok()) << s.error_message();
+  EXPECT_EQ(r.verdict(), pb::CLEAR);
+  for (const std::string& id : jobs) {
+    pb::CancelAuditRequest cancel;
+    cancel.set_job_id(id);
+    pb::AuditProgress p;
+    grpc::ClientContext c;
+    EXPECT_TRUE(stub->CancelAudit(&c, cancel, &p).ok());
+  }
+}
+
 // A job id never names two jobs, even across a restart that lost a running job.
 TEST(HostileClientE2E, AuditIdsAreUniqueAcrossRestarts) {
   const std::string dir = testing::temp_dir("hostile-audit-ids");
