@@ -192,16 +192,16 @@ grpc::Status GatekeeperService::validate_one_unguarded(const pb::ValidateStepReq
   return grpc::Status::OK;
 }
 
+// Beyond the admission bound a validation is refused at once rather than queued.
+grpc::ServerUnaryReactor* GatekeeperService::refuse_busy(grpc::CallbackServerContext* ctx, const char* method) {
+  return finish(ctx, stats_, method, Clock::now(), {grpc::StatusCode::RESOURCE_EXHAUSTED, "too many validations at once: retry later"});
+}
+
 grpc::ServerUnaryReactor* GatekeeperService::ValidateStep(grpc::CallbackServerContext* ctx,
                                                           const pb::ValidateStepRequest* request,
                                                           pb::ValidateStepResponse* response) {
-  // Admission: a bounded number at once, the rest refused at once rather than queued.
-  struct Admitted {
-    std::atomic<int>& n;
-    ~Admitted() { --n; }
-  } admitted{validations_in_flight_};
-  if (++validations_in_flight_ > options_.max_validations_in_flight)
-    return finish(ctx, stats_, "ValidateStep", Clock::now(), {grpc::StatusCode::RESOURCE_EXHAUSTED, "too many validations at once: retry later"});
+  const AdmissionTicket ticket(validations_in_flight_, options_.max_validations_in_flight);
+  if (!ticket.admitted()) return refuse_busy(ctx, "ValidateStep");
   return unary(ctx, stats_, "ValidateStep", [&]() -> grpc::Status {
     if (past_deadline(ctx)) return grpc::Status({grpc::StatusCode::DEADLINE_EXCEEDED, "deadline passed"});
     return grpc::Status(validate_one(*request, nullptr, "", response));
@@ -211,12 +211,8 @@ grpc::ServerUnaryReactor* GatekeeperService::ValidateStep(grpc::CallbackServerCo
 grpc::ServerUnaryReactor* GatekeeperService::ValidateSteps(grpc::CallbackServerContext* ctx,
                                                            const pb::ValidateStepsRequest* request,
                                                            pb::ValidateStepsResponse* response) {
-  struct Admitted {
-    std::atomic<int>& n;
-    ~Admitted() { --n; }
-  } admitted{validations_in_flight_};
-  if (++validations_in_flight_ > options_.max_validations_in_flight)
-    return finish(ctx, stats_, "ValidateSteps", Clock::now(), {grpc::StatusCode::RESOURCE_EXHAUSTED, "too many validations at once: retry later"});
+  const AdmissionTicket ticket(validations_in_flight_, options_.max_validations_in_flight);
+  if (!ticket.admitted()) return refuse_busy(ctx, "ValidateSteps");
   return unary(ctx, stats_, "ValidateSteps", [&]() -> grpc::Status {
     response->set_first_failure(-1);
     for (int i = 0; i < request->steps_size(); ++i) {

@@ -109,6 +109,7 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
   AuditJobs& audits() { return audits_; }
 
  private:
+  grpc::ServerUnaryReactor* refuse_busy(grpc::CallbackServerContext* ctx, const char* method);
 
   MachineRegistry& machines_;
   PartRegistry& parts_;

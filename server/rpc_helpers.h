@@ -30,6 +30,21 @@ inline grpc::ServerUnaryReactor* finish(grpc::CallbackServerContext* ctx, RpcSta
   return reactor;
 }
 
+// Admission of a call that runs on the callback threads: at most `limit` at once; the ticket
+// holds its place until destroyed.
+class AdmissionTicket {
+ public:
+  AdmissionTicket(std::atomic<int>& in_flight, int limit) : in_flight_(in_flight), admitted_(++in_flight_ <= limit) {}
+  ~AdmissionTicket() { --in_flight_; }
+  AdmissionTicket(const AdmissionTicket&) = delete;
+  AdmissionTicket& operator=(const AdmissionTicket&) = delete;
+  bool admitted() const { return admitted_; }
+
+ private:
+  std::atomic<int>& in_flight_;
+  bool admitted_;
+};
+
 // A request id for the log, unique within this process.
 inline std::string next_request_id() {
   static std::atomic<unsigned long long> counter{0};

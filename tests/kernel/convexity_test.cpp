@@ -34,28 +34,9 @@ TriangleMesh prism(const std::vector<Vec2>& profile, const std::vector<std::arra
 }
 
 TriangleMesh v_groove_block() {
-  // Groove from (4, 10) down to (5, 6) and up to (6, 10); the fan centre (5, 3) sees every corner.
-  std::vector<Vec2> p = {{0, 0}, {10, 0}, {10, 10}, {6, 10}, {5, 6}, {4, 10}, {0, 10}, {5, 3}};
-  std::vector<std::array<std::uint32_t, 3>> cap;
-  for (std::uint32_t i = 0; i < 7; ++i) cap.push_back({7, i, (i + 1) % 7});
-  // The fan centre is a cap vertex only: the walls follow the seven outline corners.
-  const std::vector<Vec2> outline(p.begin(), p.begin() + 7);
-  const auto n = static_cast<std::uint32_t>(outline.size());
-  std::vector<Vec3> v;
-  for (const Vec2& q : p) v.emplace_back(q.x(), q.y(), 0.0);
-  for (const Vec2& q : p) v.emplace_back(q.x(), q.y(), 20.0);
-  const std::uint32_t m = static_cast<std::uint32_t>(p.size());
-  std::vector<TriangleMesh::Face> f;
-  for (const auto& t : cap) {
-    f.push_back({t[0] + m, t[1] + m, t[2] + m});
-    f.push_back({t[0], t[2], t[1]});
-  }
-  for (std::uint32_t i = 0; i < n; ++i) {
-    const std::uint32_t j = (i + 1) % n;
-    f.push_back({i, j, j + m});
-    f.push_back({i, j + m, i + m});
-  }
-  return TriangleMesh::create(std::move(v), std::move(f)).value();
+  // A groove from (4, 10) down to (5, 6) and up to (6, 10), ear-clipped into five triangles.
+  const std::vector<Vec2> p = {{0, 0}, {10, 0}, {10, 10}, {6, 10}, {5, 6}, {4, 10}, {0, 10}};
+  return prism(p, {{0, 1, 4}, {1, 2, 3}, {1, 3, 4}, {0, 4, 5}, {0, 5, 6}}, 20.0);
 }
 
 TriangleMesh u_channel() {

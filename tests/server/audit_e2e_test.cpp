@@ -49,27 +49,7 @@ pb::Pose pose_of(const Placed& p) {
   return pose;
 }
 
-pb::AuditReport run_audit(pb::Gatekeeper::Stub& stub, const pb::StartAuditRequest& start, bool html = false) {
-  pb::AuditJob job;
-  grpc::ClientContext sctx;
-  EXPECT_TRUE(stub.StartAudit(&sctx, start, &job).ok());
-  grpc::ClientContext wctx;
-  pb::WatchAuditRequest watch;
-  watch.set_job_id(job.job_id());
-  auto reader = stub.WatchAudit(&wctx, watch);
-  pb::AuditProgress progress;
-  while (reader->Read(&progress)) {
-  }
-  EXPECT_TRUE(reader->Finish().ok());
-  grpc::ClientContext rctx;
-  rctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
-  pb::GetAuditReportRequest get;
-  get.set_job_id(job.job_id());
-  get.set_html(html);
-  pb::AuditReport report;
-  EXPECT_TRUE(stub.GetAuditReport(&rctx, get, &report).ok());
-  return report;
-}
+using testing::run_audit;
 
 // A new scene with `count` copies of a 1 m cube (part uploaded), placed by where(i), in one batch
 // request (returned, not sent) so a test can also send broken copies of it.

@@ -109,23 +109,7 @@ pb::AuditReport audit(pb::Gatekeeper::Stub& stub, const std::string& scene, doub
   pb::StartAuditRequest start;
   start.set_scene_id(scene);
   start.set_clearance_mm(clearance_mm);
-  pb::AuditJob job;
-  grpc::ClientContext sctx;
-  EXPECT_TRUE(stub.StartAudit(&sctx, start, &job).ok());
-  grpc::ClientContext wctx;
-  pb::WatchAuditRequest watch;
-  watch.set_job_id(job.job_id());
-  auto reader = stub.WatchAudit(&wctx, watch);
-  pb::AuditProgress progress;
-  while (reader->Read(&progress)) {
-  }
-  EXPECT_TRUE(reader->Finish().ok());
-  pb::GetAuditReportRequest get;
-  get.set_job_id(job.job_id());
-  pb::AuditReport report;
-  grpc::ClientContext rctx;
-  EXPECT_TRUE(stub.GetAuditReport(&rctx, get, &report).ok());
-  return report;
+  return testing::run_audit(stub, start);
 }
 
 TEST(CadVerdictE2E, SceneMovesDragsAndAuditsDecideOnTheExactFaces) {

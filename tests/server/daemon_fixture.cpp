@@ -123,4 +123,27 @@ std::string box_obj(double lo_x, double lo_y, double lo_z, double hi_x, double h
   return obj + "f 1 3 4\nf 1 4 2\nf 5 6 8\nf 5 8 7\nf 1 2 6\nf 1 6 5\nf 3 7 8\nf 3 8 4\nf 1 5 7\nf 1 7 3\nf 2 4 8\nf 2 8 6\n";
 }
 
+gatekeeper::v1::AuditReport run_audit(gatekeeper::v1::Gatekeeper::Stub& stub, const gatekeeper::v1::StartAuditRequest& start, bool html) {
+  namespace pb = ::gatekeeper::v1;
+  pb::AuditJob job;
+  grpc::ClientContext sctx;
+  EXPECT_TRUE(stub.StartAudit(&sctx, start, &job).ok());
+  grpc::ClientContext wctx;
+  pb::WatchAuditRequest watch;
+  watch.set_job_id(job.job_id());
+  auto reader = stub.WatchAudit(&wctx, watch);
+  pb::AuditProgress progress;
+  while (reader->Read(&progress)) {
+  }
+  EXPECT_TRUE(reader->Finish().ok());
+  grpc::ClientContext rctx;
+  rctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+  pb::GetAuditReportRequest get;
+  get.set_job_id(job.job_id());
+  get.set_html(html);
+  pb::AuditReport report;
+  EXPECT_TRUE(stub.GetAuditReport(&rctx, get, &report).ok());
+  return report;
+}
+
 }  // namespace gk::testing
