@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <set>
 #include <sstream>
 
@@ -21,8 +22,11 @@ constexpr std::size_t kMaxExactFacePairs = 400;
 constexpr std::size_t kMaxWindowPairs = 200000;
 // A CAD part against a mesh: mesh triangles measured against the exact faces, at most. [triangles]
 constexpr std::size_t kMaxPatchTriangles = 4000;
-// Surface points classified against the other solid to prove a collision, at most. [points]
+// Surface points classified against the other solid to prove a collision, at most: from the
+// crossing triangles... [points]
 constexpr std::size_t kMaxCertificatePoints = 64;
+// ...and from all triangles within reach. [points]
+constexpr std::size_t kMaxWindowPoints = 256;
 
 double elapsed_ms(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -127,19 +131,38 @@ Result<FacePairs> face_pairs_within(const PosedPart& a, const PosedPart& b, doub
   return out;
 }
 
+// Distinct vertices (world) of one side's triangles among the given pairs: points of its exact
+// surface (tessellation vertices lie on the faces).
+std::vector<Vec3> window_vertices(const PosedPart& side, bool side_is_a, const std::vector<ProximityPair>& pairs,
+                                  std::vector<Vec3> out) {
+  std::set<std::uint32_t> seen;
+  const TriangleMesh& m = *side.part->mesh;
+  for (const ProximityPair& p : pairs) {
+    const std::uint32_t t = side_is_a ? p.triangle_a : p.triangle_b;
+    for (int k = 0; k < 3 && out.size() < kMaxWindowPoints; ++k) {
+      const std::uint32_t v = m.faces()[t][static_cast<std::size_t>(k)];
+      if (seen.insert(v).second) out.push_back(side.pose.apply(m.vertices()[v]));
+    }
+    if (out.size() >= kMaxWindowPoints) break;
+  }
+  return out;
+}
+
 // Two CAD parts. `mesh_says_apart`: the triangles are farther apart than the window, so only the
 // distance is refined (and only when the face pairs are few, unless `must_measure`).
 void decide_cad_pair(const PosedPart& a, const PosedPart& b, double window, double rounding, bool mesh_says_apart,
                      bool must_measure, PairVerdict& out) {
   const VerdictResult mesh = out.result;
   const Vec3 origin = 0.5 * (mesh.point_a + mesh.point_b);
-  if (!mesh_says_apart && mesh.verdict != Verdict::kClear && mesh.verdict != Verdict::kTouching) {
-    // The triangles cross: a tessellation vertex of one (a point of its exact surface) inside the
-    // other solid proves the collision at once.
+  auto near = pairs_within(*a.part->bvh, a.pose, *b.part->bvh, b.pose, std::max(mesh.distance_mm, 0.0) + 2.0 * window,
+                           kMaxWindowPairs);
+  if (!mesh_says_apart && near.ok()) {
+    // A point of one part's exact surface (a tessellation vertex of a crossing or of a triangle
+    // within reach) strictly inside the other solid proves the collision.
     for (int side = 0; side < 2; ++side) {
       const PosedPart& from = side == 0 ? a : b;
       const PosedPart& into = side == 0 ? b : a;
-      const std::vector<Vec3> points = contact_vertices(from, side == 0, mesh);
+      const std::vector<Vec3> points = window_vertices(from, side == 0, near.value().pairs, contact_vertices(from, side == 0, mesh));
       if (points.empty()) continue;
       auto inside = occt::first_point_inside(into.part->shape, into.pose, points, origin, tolerances::kContactMm);
       if (inside.ok() && inside.value() >= 0) {
@@ -169,8 +192,42 @@ void decide_cad_pair(const PosedPart& a, const PosedPart& b, double window, doub
   out.face_b = c.face_b;
   out.error_bound_mm = tolerances::kBrepDistanceErrorMm + rounding;
   switch (c.relation) {
-    case occt::BrepRelation::kApart:
-      return set_clear(out, c.distance_mm, c.point_a, c.point_b, "exact faces apart");
+    case occt::BrepRelation::kApart: {
+      // BRepExtrema's face-pair extrema can stop in a local minimum: a second search from the
+      // mesh witnesses, and the tessellation's own interval, must agree.
+      double d = c.distance_mm;
+      Vec3 pa = c.point_a, pb = c.point_b;
+      double disagreement = 0.0;
+      auto second = occt::closest_by_projection(a.part->shape, a.pose, b.part->shape, b.pose, origin, mesh.point_a, mesh.point_b, 6);
+      if (second.ok()) {
+        disagreement = std::fabs(second.value().distance_mm - d);
+        if (second.value().distance_mm < d) {
+          d = second.value().distance_mm;
+          pa = second.value().point_a;
+          pb = second.value().point_b;
+          out.face_a = out.face_b = 0;
+        }
+      }
+      if (!mesh.distance_is_lower_bound && d > std::max(mesh.distance_mm, 0.0) + window + rounding + tolerances::kBrepDistanceErrorMm) {
+        if (mesh_says_apart) {  // keep the mesh answer and its bound
+          out.face_a = out.face_b = 0;
+          out.error_bound_mm = window + rounding;
+          return;
+        }
+        return set_inconclusive(out, InconclusiveReason::kBrepUndecided,
+                                "the exact distance (" + number(d) + " mm) lies outside the tessellation's interval");
+      }
+      if (disagreement > tolerances::kBrepDistanceErrorMm) out.error_bound_mm += disagreement;
+      if (!mesh_says_apart && d <= window) {
+        // Closer than the tessellation can tell: no shared volume must confirm that they are apart.
+        auto shared = occt::shared_volume(a.part->shape, a.pose, b.part->shape, b.pose, origin);
+        if (!shared.ok())
+          return set_inconclusive(out, InconclusiveReason::kBrepUndecided, "exact faces: " + shared.error().to_string());
+        if (shared.value().volume_mm3 > tolerances::kBrepOverlapVolumeMm3)
+          return set_collision(out, pa, "exact solids share " + number(shared.value().volume_mm3) + " mm^3 (Boolean common)");
+      }
+      return set_clear(out, d, pa, pb, "exact faces apart");
+    }
     case occt::BrepRelation::kTouching:
       out.result.verdict = Verdict::kTouching;
       out.result.inconclusive_reason = InconclusiveReason::kNone;
@@ -237,12 +294,18 @@ void decide_cad_mesh(const PosedPart& a, const PosedPart& b, bool cad_is_a, doub
     auto inside = occt::first_point_inside(cad.part->shape, cad.pose, patch_vertices, origin, tolerances::kContactMm);
     if (inside.ok() && inside.value() >= 0) return set_mesh_point_inside(patch_vertices[static_cast<std::size_t>(inside.value())]);
   }
-  auto exact = occt::distance_to_triangles(cad.part->shape, cad.pose, patch, origin);
-  if (!exact.ok()) {
-    if (mesh_says_apart) return;
-    return set_inconclusive(out, InconclusiveReason::kBrepUndecided, "exact faces: " + exact.error().to_string());
+  // No mesh triangle within reach (the mesh wholly inside the solid, or far apart): only nesting
+  // is left to decide.
+  occt::TriangleSetDistance d;
+  d.distance_mm = std::numeric_limits<double>::infinity();
+  if (!patch.empty()) {
+    auto exact = occt::distance_to_triangles(cad.part->shape, cad.pose, patch, origin);
+    if (!exact.ok()) {
+      if (mesh_says_apart) return;
+      return set_inconclusive(out, InconclusiveReason::kBrepUndecided, "exact faces: " + exact.error().to_string());
+    }
+    d = exact.value();
   }
-  const occt::TriangleSetDistance& d = exact.value();
   if (d.distance_mm <= tolerances::kContactMm) {
     if (mesh_says_apart) return;
     return set_inconclusive(out, InconclusiveReason::kTessellationUnresolved,
@@ -261,8 +324,10 @@ void decide_cad_mesh(const PosedPart& a, const PosedPart& b, bool cad_is_a, doub
     // A point of the CAD part's exact surface (a tessellation vertex) inside the closed mesh.
     const RigidTransform to_mesh = mesh_side.pose.inverse();
     for (const Vec3& p : body_points(cad)) {
-      const std::optional<bool> in = point_inside(*mesh_side.part->bvh, to_mesh.apply(p));
-      if (in.value_or(std::fabs(winding_number(m, to_mesh.apply(p))) > 0.5)) {
+      const Vec3 q = to_mesh.apply(p);
+      // (Several bodies may overlap: the winding number counts each; ray parity would not.)
+      const std::optional<bool> parity = m.body_seeds().size() > 1 ? std::nullopt : point_inside(*mesh_side.part->bvh, q);
+      if (parity.value_or(std::fabs(winding_number(m, q)) > 0.5)) {
         set_collision(out, p, "the CAD part lies inside the closed mesh");
         out.error_bound_mm = tolerances::kBrepDistanceErrorMm + rounding;
         out.result.contained = true;
@@ -270,6 +335,12 @@ void decide_cad_mesh(const PosedPart& a, const PosedPart& b, bool cad_is_a, doub
         return;
       }
     }
+  }
+  if (!std::isfinite(d.distance_mm)) {  // apart beyond reach: the mesh answer stands
+    if (mesh_says_apart || mesh.verdict == Verdict::kClear) return;
+    return set_inconclusive(out, InconclusiveReason::kTessellationUnresolved,
+                            "the mesh collides with the CAD part's tessellation but not with its exact faces, and no point "
+                            "of either lies inside the other");
   }
   out.face_a = cad_is_a ? d.face : 0;
   out.face_b = cad_is_a ? 0 : d.face;

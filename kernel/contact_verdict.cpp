@@ -198,6 +198,12 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
     // Ray parity through the BVH decides it in O(log n); the winding number (O(n)) only when
     // every ray was degenerate.
     auto inside = [](const MeshBvh& m, const Vec3& p) {
+      // Ray parity is wrong where bodies of one mesh overlap (an assembly of solids: a point in two
+      // of them crosses four surfaces); the winding number counts each body.
+      if (m.mesh().body_seeds().size() > 1) {
+        if (!m.root_bounds().expanded(0.0).contains(Aabb{p, p})) return false;
+        return std::fabs(winding_number(m.mesh(), p)) > 0.5;
+      }
       if (const auto parity = point_inside(m, p)) return *parity;  // false outside its box at once
       return std::fabs(winding_number(m.mesh(), p)) > 0.5;
     };

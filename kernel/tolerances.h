@@ -70,4 +70,9 @@ inline constexpr double kBrepDistanceErrorMm = 1.0e-6;
 // or empty common is a touching contact. Two R50 spheres overlapping by 1e-4 mm share 8e-7 mm^3. [mm^3]
 inline constexpr double kBrepOverlapVolumeMm3 = 1.0e-9;
 
+// A CAD part is tessellated no finer than this fraction of its box diagonal (its requested
+// deflection otherwise): this bounds the triangles of a huge part; the exact faces decide within
+// its wider deflection window. [1]
+inline constexpr double kCadDeflectionRelative = 1.0e-5;
+
 }  // namespace gk::tolerances

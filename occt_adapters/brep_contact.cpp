@@ -4,8 +4,16 @@
 #include "occt_adapters/shape_builders.h"
 #include "occt_adapters/shape_impl.h"
 
+#include <BRepAdaptor_Surface.hxx>
 #include <BRepAlgoAPI_Common.hxx>
+#include <BRepClass_FaceClassifier.hxx>
+#include <Extrema_GenLocateExtSS.hxx>
+#include <Extrema_POnSurf.hxx>
+#include <gp_Pnt2d.hxx>
+#include <BRepBndLib.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
+#include <BRepBuilderAPI_MakeVertex.hxx>
+#include <Bnd_Box.hxx>
 #include <BRepBuilderAPI_MakePolygon.hxx>
 #include <BRepClass3d_SolidClassifier.hxx>
 #include <BRepExtrema_DistShapeShape.hxx>
@@ -70,16 +78,40 @@ std::vector<gp_Pnt> one_point_per_solid(const TopoDS_Shape& shape) {
   return out;
 }
 
-// Total volume of the solids in a Boolean result (faces or edges left by a touching contact
-// carry no volume and must not be integrated as if they closed one).
-double solid_volume(const TopoDS_Shape& shape) {
-  double total = 0.0;
-  for (TopExp_Explorer e(shape, TopAbs_SOLID); e.More(); e.Next()) {
-    GProp_GProps props;
-    BRepGProp::VolumeProperties(e.Current(), props);
-    total += std::fabs(props.Mass());
+// The solids of a shape (the shape itself when it holds none).
+std::vector<TopoDS_Shape> solids_of(const TopoDS_Shape& shape) {
+  std::vector<TopoDS_Shape> out;
+  for (TopExp_Explorer e(shape, TopAbs_SOLID); e.More(); e.Next()) out.push_back(e.Current());
+  if (out.empty()) out.push_back(shape);
+  return out;
+}
+
+// The volume shared by the solids of a and of b, one Boolean per pair of solids whose boxes meet:
+// OCCT's Booleans assume each argument is free of self-interference, which an assembly of
+// overlapping solids is not (one common of the whole compounds called a shared 8000 mm^3 a touch).
+// Solids of one assembly that overlap each other are counted once per pair. False when a Boolean
+// failed.
+bool common_volume(const TopoDS_Shape& a, const TopoDS_Shape& b, double& volume, double& error_estimate) {
+  volume = error_estimate = 0.0;
+  for (const TopoDS_Shape& sa : solids_of(a)) {
+    Bnd_Box box_a;
+    BRepBndLib::Add(sa, box_a);
+    for (const TopoDS_Shape& sb : solids_of(b)) {
+      Bnd_Box box_b;
+      BRepBndLib::Add(sb, box_b);
+      if (box_a.IsOut(box_b)) continue;
+      BRepAlgoAPI_Common common(sa, sb);
+      if (!common.IsDone() || common.HasErrors()) return false;
+      for (TopExp_Explorer e(common.Shape(), TopAbs_SOLID); e.More(); e.Next()) {
+        GProp_GProps props;
+        // With a requested precision OCCT integrates adaptively and returns its relative error estimate.
+        const double relative = BRepGProp::VolumeProperties(e.Current(), props, 1e-9);
+        volume += std::fabs(props.Mass());
+        error_estimate += std::fabs(relative * props.Mass());
+      }
+    }
   }
-  return total;
+  return true;
 }
 
 }  // namespace
@@ -137,10 +169,9 @@ Result<BrepContact> decide_brep_contact(const Shape& a, const RigidTransform& po
       return;
     }
     // Boundaries meet: a shared volume means they cross.
-    BRepAlgoAPI_Common common(sa, sb);
     out.used_boolean = true;
-    if (!common.IsDone() || common.HasErrors()) return void(failure = "BRepAlgoAPI_Common failed");
-    out.shared_volume_mm3 = solid_volume(common.Shape());
+    double estimate = 0.0;
+    if (!common_volume(sa, sb, out.shared_volume_mm3, estimate)) return void(failure = "BRepAlgoAPI_Common failed");
     out.relation = out.shared_volume_mm3 > overlap_volume_mm3 ? BrepRelation::kOverlapping : BrepRelation::kTouching;
     out.distance_mm = 0.0;
   });
@@ -160,18 +191,86 @@ Result<SharedVolume> shared_volume(const Shape& a, const RigidTransform& pose_a,
   SharedVolume out;
   bool failed = false;
   auto ran = guarded("shapes", "Boolean common", [&] {
-    BRepAlgoAPI_Common common(placed_a.value().impl().shape, placed_b.value().impl().shape);
-    if (!common.IsDone() || common.HasErrors()) return void(failed = true);
-    for (TopExp_Explorer e(common.Shape(), TopAbs_SOLID); e.More(); e.Next()) {
-      GProp_GProps props;
-      // With a requested precision OCCT integrates adaptively and returns its relative error estimate.
-      const double relative = BRepGProp::VolumeProperties(e.Current(), props, 1e-9);
-      out.volume_mm3 += std::fabs(props.Mass());
-      out.error_estimate_mm3 += std::fabs(relative * props.Mass());
-    }
+    failed = !common_volume(placed_a.value().impl().shape, placed_b.value().impl().shape, out.volume_mm3, out.error_estimate_mm3);
   });
   if (!ran.ok()) return ran.error();
   if (failed) return Error{ErrorCode::kInternal, "shapes", "BRepAlgoAPI_Common failed"};
+  return out;
+}
+
+Result<ProjectedPair> closest_by_projection(const Shape& a, const RigidTransform& pose_a, const Shape& b,
+                                            const RigidTransform& pose_b, const Vec3& frame_origin, const Vec3& start_a,
+                                            const Vec3& start_b, int iterations) {
+  if (a.is_null()) return invalid_argument("a", "is empty");
+  if (b.is_null()) return invalid_argument("b", "is empty");
+  auto placed_a = place(a, in_local_frame(pose_a, frame_origin));
+  if (!placed_a.ok()) return placed_a.error();
+  auto placed_b = place(b, in_local_frame(pose_b, frame_origin));
+  if (!placed_b.ok()) return placed_b.error();
+  ProjectedPair out;
+  std::string failure;
+  auto ran = guarded("shapes", "projecting witnesses", [&] {
+    // The nearest point of a shape to a point (a vertex against the shape: point-surface extrema,
+    // reliable for a point this close to the surface).
+    auto nearest = [&](const TopoDS_Shape& shape, const gp_Pnt& p, gp_Pnt& q) {
+      BRepExtrema_DistShapeShape dist(BRepBuilderAPI_MakeVertex(p).Vertex(), shape);
+      if (!dist.IsDone() || dist.NbSolution() < 1) return false;
+      q = dist.PointOnShape2(1);
+      return true;
+    };
+    const Vec3 la = start_a - frame_origin, lb = start_b - frame_origin;
+    gp_Pnt qa, qb;
+    if (!nearest(placed_a.value().impl().shape, gp_Pnt(la.x(), la.y(), la.z()), qa) ||
+        !nearest(placed_b.value().impl().shape, gp_Pnt(lb.x(), lb.y(), lb.z()), qb))
+      return void(failure = "a witness could not be projected");
+    double best = qa.Distance(qb);
+    out = {best, vec(qa) + frame_origin, vec(qb) + frame_origin};
+    for (int i = 0; i < iterations; ++i) {
+      gp_Pnt nb, na;
+      if (!nearest(placed_b.value().impl().shape, qa, nb) || !nearest(placed_a.value().impl().shape, nb, na)) break;
+      qa = na;
+      qb = nb;
+      const double d = qa.Distance(qb);
+      if (d < best) out = {d, vec(qa) + frame_origin, vec(qb) + frame_origin};
+      if (!(d < best - 1e-9)) break;
+      best = d;
+    }
+    // Alternating projections crawl where the surfaces are nearly parallel (tangent spheres):
+    // Newton on the two faces that hold the points (Extrema_GenLocateExtSS) from their parameters,
+    // accepted only when both points lie on their (trimmed) faces.
+    struct OnFace {
+      TopoDS_Face face;
+      double u = 0.0, v = 0.0;
+    };
+    auto face_at = [&](const TopoDS_Shape& shape, const gp_Pnt& p, OnFace& f) {
+      BRepExtrema_DistShapeShape dist(BRepBuilderAPI_MakeVertex(p).Vertex(), shape);
+      if (!dist.IsDone() || dist.NbSolution() < 1 || dist.SupportTypeShape2(1) != BRepExtrema_IsInFace) return false;
+      f.face = TopoDS::Face(dist.SupportOnShape2(1));
+      dist.ParOnFaceS2(1, f.u, f.v);
+      return true;
+    };
+    auto inside_face = [](const TopoDS_Face& face, double u, double v) {
+      BRepClass_FaceClassifier classifier(face, gp_Pnt2d(u, v), 1e-9);
+      return classifier.State() == TopAbs_IN || classifier.State() == TopAbs_ON;
+    };
+    const gp_Pnt pa(out.point_a.x() - frame_origin.x(), out.point_a.y() - frame_origin.y(), out.point_a.z() - frame_origin.z());
+    const gp_Pnt pb(out.point_b.x() - frame_origin.x(), out.point_b.y() - frame_origin.y(), out.point_b.z() - frame_origin.z());
+    OnFace fa, fb;
+    if (face_at(placed_a.value().impl().shape, pa, fa) && face_at(placed_b.value().impl().shape, pb, fb)) {
+      const BRepAdaptor_Surface sa(fa.face), sb(fb.face);
+      Extrema_GenLocateExtSS newton(sa, sb, fa.u, fa.v, fb.u, fb.v, 1e-12, 1e-12);
+      if (newton.IsDone()) {
+        double u1 = 0.0, v1 = 0.0, u2 = 0.0, v2 = 0.0;
+        newton.PointOnS1().Parameter(u1, v1);
+        newton.PointOnS2().Parameter(u2, v2);
+        const double d = std::sqrt(newton.SquareDistance());
+        if (d < out.distance_mm && inside_face(fa.face, u1, v1) && inside_face(fb.face, u2, v2))
+          out = {d, vec(newton.PointOnS1().Value()) + frame_origin, vec(newton.PointOnS2().Value()) + frame_origin};
+      }
+    }
+  });
+  if (!ran.ok()) return ran.error();
+  if (!failure.empty()) return Error{ErrorCode::kInternal, "shapes", failure};
   return out;
 }
 

@@ -34,7 +34,7 @@ struct BrepContact {
 
 // The two shapes at their poses. `face_pairs` (1-based, a's then b's) restricts the distance to the
 // pairs that can hold the minimum; empty: all faces. Boundaries closer than touch_mm are touching or
-// crossing, told apart by a Boolean common with a volume above overlap_volume_mm3.
+// crossing, told apart by a Boolean common (solid by solid) with a volume above overlap_volume_mm3.
 Result<BrepContact> decide_brep_contact(const Shape& a, const RigidTransform& pose_a, const Shape& b,
                                         const RigidTransform& pose_b, const Vec3& frame_origin,
                                         const std::vector<std::pair<int, int>>& face_pairs, double touch_mm,
@@ -48,6 +48,18 @@ struct SharedVolume {
 };
 Result<SharedVolume> shared_volume(const Shape& a, const RigidTransform& pose_a, const Shape& b, const RigidTransform& pose_b,
                                    const Vec3& frame_origin);
+
+// A second search for the closest points, independent of BRepExtrema's face-pair extrema (which
+// can stop in a local minimum): the mesh witnesses projected onto the exact shapes, then projected
+// alternately onto each other until the distance stops falling. Real surface points: the distance
+// is an upper bound of the true one, and near the tessellation's minimum.
+struct ProjectedPair {
+  double distance_mm = 0.0;
+  Vec3 point_a = Vec3::Zero(), point_b = Vec3::Zero();  // world
+};
+Result<ProjectedPair> closest_by_projection(const Shape& a, const RigidTransform& pose_a, const Shape& b,
+                                            const RigidTransform& pose_b, const Vec3& frame_origin, const Vec3& start_a,
+                                            const Vec3& start_b, int iterations);
 
 // The first of the world points lying strictly inside a solid of the shape at its pose (farther in
 // than tolerance_mm), or -1. A point on a body's exact surface found inside the other solid proves

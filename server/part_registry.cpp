@@ -1,5 +1,7 @@
 #include "server/part_registry.h"
 
+#include "kernel/tolerances.h"
+
 #include "mesh_io/mesh_file_reader.h"
 #include "occt_adapters/shape_import.h"
 #include "occt_adapters/shape_mesher.h"
@@ -35,12 +37,18 @@ class NamedByFormat {
 }  // namespace
 
 Result<TriangleMesh> PartRegistry::read_any(const std::string& path, const std::string& format, double deflection_mm,
-                                            occt::Shape* shape_out, std::vector<int>* face_of_triangle) {
+                                            occt::Shape* shape_out, std::vector<int>* face_of_triangle, double* used_deflection_mm) {
   const NamedByFormat named(path, format);
   if (is_cad_format(format)) {
     auto shape = occt::read_shape_file(named.path());
     if (!shape.ok()) return invalid_argument("data", shape.error().message);
-    auto meshed = occt::mesh_shape(shape.value(), deflection_mm);
+    // A huge part is tessellated coarser (a 200 m sphere at 0.05 mm took the daemon past 20 GB):
+    // its window of exact-face decisions grows instead.
+    const Aabb box = shape.value().bounds();
+    const double diagonal = box.empty() ? 0.0 : (box.max - box.min).norm();
+    const double deflection = std::max(deflection_mm, tolerances::kCadDeflectionRelative * diagonal);
+    if (used_deflection_mm) *used_deflection_mm = deflection;
+    auto meshed = occt::mesh_shape(shape.value(), deflection);
     if (!meshed.ok()) return invalid_argument("data", meshed.error().to_string());
     if (shape_out) *shape_out = shape.value();
     if (face_of_triangle) *face_of_triangle = meshed.value().face_of_triangle;
@@ -72,8 +80,9 @@ Result<std::shared_ptr<const LoadedPart>> PartRegistry::load(const std::string& 
     if (it != loaded_.end()) return it->second;
   }
   auto part = std::make_shared<LoadedPart>();
+  double used_deflection = key_deflection;
   auto mesh = read_any(store_.path_of(record.value()), record.value().format, deflection_mm, &part->shape,
-                       &part->face_of_triangle);
+                       &part->face_of_triangle, &used_deflection);
   if (!mesh.ok()) return mesh.error();
   part->record = record.value();
   part->mesh = std::make_shared<const TriangleMesh>(std::move(mesh).value());
@@ -81,7 +90,7 @@ Result<std::shared_ptr<const LoadedPart>> PartRegistry::load(const std::string& 
   if (!bvh.ok()) return bvh.error();
   part->bvh = bvh.value();
   // A CAD part of planes and straight edges is tessellated exactly; curved ones deviate.
-  part->deflection_mm = part->shape.is_polyhedral() ? 0.0 : key_deflection;
+  part->deflection_mm = part->shape.is_polyhedral() ? 0.0 : used_deflection;
   std::lock_guard<std::mutex> lock(mutex_);
   loaded_[{id, key_deflection}] = part;
   return std::shared_ptr<const LoadedPart>(part);

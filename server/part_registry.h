@@ -33,8 +33,11 @@ class PartRegistry {
 
   // Reads any supported file into a mesh (used to describe an upload before it is recorded); for
   // CAD files also the shape and each triangle's face.
+  // CAD parts larger than deflection_mm / kCadDeflectionRelative are tessellated coarser
+  // (used_deflection_mm says at what).
   static Result<TriangleMesh> read_any(const std::string& path, const std::string& format, double deflection_mm,
-                                       occt::Shape* shape = nullptr, std::vector<int>* face_of_triangle = nullptr);
+                                       occt::Shape* shape = nullptr, std::vector<int>* face_of_triangle = nullptr,
+                                       double* used_deflection_mm = nullptr);
 
   PartStore& store() { return store_; }
 
