@@ -98,6 +98,14 @@ std::string add_depth(const PosedSide& a, const PosedSide& b, const Vec3& along,
     response->set_depth_pieces_a(static_cast<std::uint32_t>(d.pieces_a));
     response->set_depth_pieces_b(static_cast<std::uint32_t>(d.pieces_b));
   }
+  if (!(direction.norm() > 0.0)) {
+    // The tessellations are already free (the exact solids overlap by less than the deflections):
+    // B is moved apart along the line between the parts' centres, checked on the exact faces.
+    direction = transformed_box(b.part->mesh->bounds(), b.pose).center() - transformed_box(a.part->mesh->bounds(), a.pose).center();
+    if (!(direction.norm() > 0.0)) direction = Vec3::UnitZ();
+    direction.normalize();
+    method = "between the parts' centres";
+  }
   auto checked = engine::check_depth_on_brep(pa, pb_, direction, depth);
   if (!checked.ok()) return "depth: " + checked.error().message + "; ";
   if (engine::deflection_window(pa, pb_) > 0.0) {
