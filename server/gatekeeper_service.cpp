@@ -24,7 +24,13 @@ constexpr std::size_t kMaxChunkBytes = 1u << 20;
 // finishing (hash check, fsync, parsing, record) runs on the work pool.
 class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> {
  public:
-  UploadReactor(GatekeeperService& service, pb::PartInfo* reply) : service_(service), reply_(reply), t0_(Clock::now()) {
+  UploadReactor(GatekeeperService& service, grpc::CallbackServerContext* ctx, pb::PartInfo* reply)
+      : service_(service), ctx_(ctx), reply_(reply), t0_(Clock::now()) {
+    slot_ = service_.upload_slots().open(ctx_);
+    if (slot_ == 0) {
+      done({grpc::StatusCode::RESOURCE_EXHAUSTED, "too many uploads open at once: retry later"});
+      return;
+    }
     StartRead(&chunk_);
   }
 
@@ -36,14 +42,19 @@ class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> 
     if (!read.ok()) fail_with(read);
   }
 
-  void OnDone() override { delete this; }
+  void OnDone() override {
+    if (slot_ != 0) service_.upload_slots().release(slot_);
+    delete this;
+  }
 
  private:
   void on_read(bool ok) {
-    if (!ok) {  // the client closed its side (or went away): finish what arrived
+    if (!ok && ctx_->IsCancelled()) return fail_with({grpc::StatusCode::CANCELLED, "the upload was cancelled or idle too long"});
+    if (!ok) {  // the client closed its side: finish what arrived
       complete();
       return;
     }
+    service_.upload_slots().touch(slot_);
     if (!upload_) {
       if (!chunk_.has_header()) return fail(invalid_argument("header", "the first message must carry the header"));
       const pb::UploadHeader& h = chunk_.header();
@@ -71,6 +82,9 @@ class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> 
   }
 
   void complete() {
+    // The client has sent everything: no longer an idle stream to reap (finishing may take long).
+    service_.upload_slots().release(slot_);
+    slot_ = 0;
     if (!upload_) return done({grpc::StatusCode::INVALID_ARGUMENT, "header: no upload header received"});
     auto* self = this;
     const bool queued = service_.pool().try_submit([self] {
@@ -105,6 +119,8 @@ class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> 
   }
 
   GatekeeperService& service_;
+  grpc::CallbackServerContext* ctx_;
+  std::uint64_t slot_ = 0;
   pb::PartInfo* reply_;
   Clock::time_point t0_;
   pb::UploadPartChunk chunk_;
@@ -117,7 +133,8 @@ GatekeeperService::GatekeeperService(MachineRegistry& machines, PartRegistry& pa
                                      ServiceOptions options)
     : machines_(machines), parts_(parts), scenes_(scenes), archive_(archive), options_(options),
       pool_(options.workers, options.max_queued),
-      audit_pool_(options.audit_jobs, options.audit_queue) {
+      audit_pool_(options.audit_jobs, options.audit_queue),
+      upload_slots_(options.max_open_uploads, options.upload_idle_limit) {
   if (archive_) {
     std::size_t unreadable = 0;
     for (auto& [id, job] : archive_->load_all(&unreadable)) audits_.restore(id, std::move(job));
@@ -255,9 +272,9 @@ grpc::ServerUnaryReactor* GatekeeperService::ClearanceQuery(grpc::CallbackServer
   return reactor;
 }
 
-grpc::ServerReadReactor<pb::UploadPartChunk>* GatekeeperService::UploadPart(grpc::CallbackServerContext*,
+grpc::ServerReadReactor<pb::UploadPartChunk>* GatekeeperService::UploadPart(grpc::CallbackServerContext* ctx,
                                                                            pb::PartInfo* response) {
-  return new UploadReactor(*this, response);
+  return new UploadReactor(*this, ctx, response);
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::GetPartInfo(grpc::CallbackServerContext* ctx, const pb::GetPartInfoRequest* request,

@@ -11,6 +11,7 @@
 #include "server/rpc_stats.h"
 #include "server/scene_queries.h"
 #include "server/scene_store.h"
+#include "server/upload_slots.h"
 #include "server/work_pool.h"
 
 #include <atomic>
@@ -32,6 +33,8 @@ struct ServiceOptions {
   // ValidateStep(s) run on the callback threads (a step is ~0.2 ms); beyond this many at once the
   // call is answered RESOURCE_EXHAUSTED instead of queueing behind the others.
   int max_validations_in_flight = 64;
+  std::size_t max_open_uploads = 64;             // upload streams open at once; beyond, RESOURCE_EXHAUSTED
+  std::chrono::milliseconds upload_idle_limit{60000};  // an upload silent this long is cancelled
   std::string version = "0.1.0";
 };
 
@@ -49,6 +52,7 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
   RpcStats& stats() { return stats_; }
   PartRegistry& parts() { return parts_; }
   WorkPool& pool() { return pool_; }
+  UploadSlots& upload_slots() { return upload_slots_; }
 
   grpc::ServerUnaryReactor* ValidateStep(grpc::CallbackServerContext* ctx, const pb::ValidateStepRequest* request,
                                          pb::ValidateStepResponse* response) override;
@@ -121,6 +125,7 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
   RpcStats stats_;
   WorkPool pool_;
   WorkPool audit_pool_;
+  UploadSlots upload_slots_;
   std::atomic<int> validations_in_flight_{0};
 };
 

@@ -29,6 +29,8 @@ struct Config {
   int workers = 2;
   int queue = 64;
   int audit_jobs = 1;
+  int max_uploads = 64;
+  double upload_idle_seconds = 60.0;
   int drain_seconds = 5;
 };
 
@@ -62,6 +64,9 @@ int main(int argc, char** argv) {
   app.add_option("--queue", config.queue, "queued jobs beyond which requests get RESOURCE_EXHAUSTED")->check(CLI::Range(1, 100000));
   app.add_option("--audit-jobs", config.audit_jobs, "audits run at once, on their own threads (a running audit never delays queries)")
       ->check(CLI::Range(1, 16));
+  app.add_option("--max-uploads", config.max_uploads, "upload streams open at once (each holds a file)")->check(CLI::Range(1, 10000));
+  app.add_option("--upload-idle-seconds", config.upload_idle_seconds, "an upload stream silent this long is cancelled")
+      ->check(CLI::Range(0.1, 86400.0));
   app.add_option("--port-file", config.port_file, "write the bound port to this file once serving");
   app.add_option("--drain-seconds", config.drain_seconds, "on SIGTERM, how long in-flight calls may finish")
       ->check(CLI::Range(0, 600));
@@ -93,6 +98,8 @@ int main(int argc, char** argv) {
   options.audit_threads = config.workers;
   options.max_queued = static_cast<std::size_t>(config.queue);
   options.audit_jobs = config.audit_jobs;
+  options.max_open_uploads = static_cast<std::size_t>(config.max_uploads);
+  options.upload_idle_limit = std::chrono::milliseconds(static_cast<long long>(config.upload_idle_seconds * 1000.0));
   auto scenes = gk::server::SceneStore::open(config.data_dir);
   if (!scenes.ok()) {
     spdlog::error("{}", scenes.error().to_string());

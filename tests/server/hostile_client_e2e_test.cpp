@@ -206,6 +206,38 @@ TEST(HostileClientE2E, RunningAuditsDoNotDelayAClearanceQuery) {
   }
 }
 
+// Upload streams are bounded in number and in idle time (1,100 idle header-only streams exhausted
+// the descriptors): beyond the cap they are refused, an idle one is cancelled, health answers.
+TEST(HostileClientE2E, IdleUploadStreamsAreCappedAndReaped) {
+  Daemon daemon(testing::temp_dir("hostile-uploads"), {"--max-uploads", "8", "--upload-idle-seconds", "1"});
+  auto stub = daemon.stub();
+  std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
+  std::vector<std::unique_ptr<grpc::ClientWriter<pb::UploadPartChunk>>> streams;
+  std::vector<pb::PartInfo> infos(12);
+  for (int i = 0; i < 12; ++i) {
+    contexts.push_back(std::make_unique<grpc::ClientContext>());
+    streams.push_back(stub->UploadPart(contexts.back().get(), &infos[static_cast<std::size_t>(i)]));
+    pb::UploadPartChunk header;
+    header.mutable_header()->set_name("idle.obj");
+    header.mutable_header()->set_format("obj");
+    header.mutable_header()->set_size_bytes(100);
+    header.mutable_header()->set_sha256(std::string(64, 'a'));
+    streams.back()->Write(header);
+  }
+  expect_alive(*stub);  // while they hang
+  int exhausted = 0, cancelled = 0;
+  for (auto& s : streams) {
+    const grpc::Status status = s->Finish();  // waits: the idle ones are reaped after about 1 s
+    if (status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED) ++exhausted;
+    if (status.error_code() == grpc::StatusCode::CANCELLED) ++cancelled;
+  }
+  EXPECT_EQ(exhausted, 4);
+  EXPECT_EQ(cancelled, 8);
+  // The slots are free again.
+  EXPECT_FALSE(testing::upload_part_id(*stub, testing::box_obj(0, 0, 0, 1, 1, 1), "obj").empty());
+  expect_alive(*stub);
+}
+
 // A job id never names two jobs, even across a restart that lost a running job.
 TEST(HostileClientE2E, AuditIdsAreUniqueAcrossRestarts) {
   const std::string dir = testing::temp_dir("hostile-audit-ids");
