@@ -42,6 +42,18 @@ RigidTransform in_local_frame(const RigidTransform& pose, const Vec3& frame_orig
 
 Vec3 vec(const gp_Pnt& p) { return Vec3(p.X(), p.Y(), p.Z()); }
 
+// Both shapes moved into the frame local to frame_origin.
+Result<std::pair<Shape, Shape>> place_pair(const Shape& a, const RigidTransform& pose_a, const Shape& b,
+                                           const RigidTransform& pose_b, const Vec3& frame_origin) {
+  if (a.is_null()) return invalid_argument("a", "is empty");
+  if (b.is_null()) return invalid_argument("b", "is empty");
+  auto placed_a = place(a, in_local_frame(pose_a, frame_origin));
+  if (!placed_a.ok()) return placed_a.error();
+  auto placed_b = place(b, in_local_frame(pose_b, frame_origin));
+  if (!placed_b.ok()) return placed_b.error();
+  return std::make_pair(placed_a.value(), placed_b.value());
+}
+
 struct Measured {
   double distance = std::numeric_limits<double>::infinity();
   Vec3 a = Vec3::Zero(), b = Vec3::Zero();  // local frame
@@ -120,15 +132,11 @@ Result<BrepContact> decide_brep_contact(const Shape& a, const RigidTransform& po
                                         const RigidTransform& pose_b, const Vec3& frame_origin,
                                         const std::vector<std::pair<int, int>>& face_pairs, double touch_mm,
                                         double overlap_volume_mm3) {
-  if (a.is_null()) return invalid_argument("a", "is empty");
-  if (b.is_null()) return invalid_argument("b", "is empty");
   if (!frame_origin.allFinite()) return invalid_argument("frame_origin", "must be finite");
-  auto placed_a = place(a, in_local_frame(pose_a, frame_origin));
-  if (!placed_a.ok()) return placed_a.error();
-  auto placed_b = place(b, in_local_frame(pose_b, frame_origin));
-  if (!placed_b.ok()) return placed_b.error();
-  const TopoDS_Shape& sa = placed_a.value().impl().shape;
-  const TopoDS_Shape& sb = placed_b.value().impl().shape;
+  auto placed = place_pair(a, pose_a, b, pose_b, frame_origin);
+  if (!placed.ok()) return placed.error();
+  const TopoDS_Shape& sa = placed.value().first.impl().shape;
+  const TopoDS_Shape& sb = placed.value().second.impl().shape;
 
   BrepContact out;
   std::string failure;
@@ -182,16 +190,14 @@ Result<BrepContact> decide_brep_contact(const Shape& a, const RigidTransform& po
 
 Result<SharedVolume> shared_volume(const Shape& a, const RigidTransform& pose_a, const Shape& b, const RigidTransform& pose_b,
                                    const Vec3& frame_origin) {
-  if (a.is_null()) return invalid_argument("a", "is empty");
-  if (b.is_null()) return invalid_argument("b", "is empty");
-  auto placed_a = place(a, in_local_frame(pose_a, frame_origin));
-  if (!placed_a.ok()) return placed_a.error();
-  auto placed_b = place(b, in_local_frame(pose_b, frame_origin));
-  if (!placed_b.ok()) return placed_b.error();
+  auto placed = place_pair(a, pose_a, b, pose_b, frame_origin);
+  if (!placed.ok()) return placed.error();
+  const TopoDS_Shape& placed_a = placed.value().first.impl().shape;
+  const TopoDS_Shape& placed_b = placed.value().second.impl().shape;
   SharedVolume out;
   bool failed = false;
   auto ran = guarded("shapes", "Boolean common", [&] {
-    failed = !common_volume(placed_a.value().impl().shape, placed_b.value().impl().shape, out.volume_mm3, out.error_estimate_mm3);
+    failed = !common_volume(placed_a, placed_b, out.volume_mm3, out.error_estimate_mm3);
   });
   if (!ran.ok()) return ran.error();
   if (failed) return Error{ErrorCode::kInternal, "shapes", "BRepAlgoAPI_Common failed"};
@@ -201,12 +207,10 @@ Result<SharedVolume> shared_volume(const Shape& a, const RigidTransform& pose_a,
 Result<ProjectedPair> closest_by_projection(const Shape& a, const RigidTransform& pose_a, const Shape& b,
                                             const RigidTransform& pose_b, const Vec3& frame_origin, const Vec3& start_a,
                                             const Vec3& start_b, int iterations) {
-  if (a.is_null()) return invalid_argument("a", "is empty");
-  if (b.is_null()) return invalid_argument("b", "is empty");
-  auto placed_a = place(a, in_local_frame(pose_a, frame_origin));
-  if (!placed_a.ok()) return placed_a.error();
-  auto placed_b = place(b, in_local_frame(pose_b, frame_origin));
-  if (!placed_b.ok()) return placed_b.error();
+  auto placed = place_pair(a, pose_a, b, pose_b, frame_origin);
+  if (!placed.ok()) return placed.error();
+  const TopoDS_Shape& placed_a = placed.value().first.impl().shape;
+  const TopoDS_Shape& placed_b = placed.value().second.impl().shape;
   ProjectedPair out;
   std::string failure;
   auto ran = guarded("shapes", "projecting witnesses", [&] {
@@ -220,14 +224,14 @@ Result<ProjectedPair> closest_by_projection(const Shape& a, const RigidTransform
     };
     const Vec3 la = start_a - frame_origin, lb = start_b - frame_origin;
     gp_Pnt qa, qb;
-    if (!nearest(placed_a.value().impl().shape, gp_Pnt(la.x(), la.y(), la.z()), qa) ||
-        !nearest(placed_b.value().impl().shape, gp_Pnt(lb.x(), lb.y(), lb.z()), qb))
+    if (!nearest(placed_a, gp_Pnt(la.x(), la.y(), la.z()), qa) ||
+        !nearest(placed_b, gp_Pnt(lb.x(), lb.y(), lb.z()), qb))
       return void(failure = "a witness could not be projected");
     double best = qa.Distance(qb);
     out = {best, vec(qa) + frame_origin, vec(qb) + frame_origin};
     for (int i = 0; i < iterations; ++i) {
       gp_Pnt nb, na;
-      if (!nearest(placed_b.value().impl().shape, qa, nb) || !nearest(placed_a.value().impl().shape, nb, na)) break;
+      if (!nearest(placed_b, qa, nb) || !nearest(placed_a, nb, na)) break;
       qa = na;
       qb = nb;
       const double d = qa.Distance(qb);
@@ -256,7 +260,7 @@ Result<ProjectedPair> closest_by_projection(const Shape& a, const RigidTransform
     const gp_Pnt pa(out.point_a.x() - frame_origin.x(), out.point_a.y() - frame_origin.y(), out.point_a.z() - frame_origin.z());
     const gp_Pnt pb(out.point_b.x() - frame_origin.x(), out.point_b.y() - frame_origin.y(), out.point_b.z() - frame_origin.z());
     OnFace fa, fb;
-    if (face_at(placed_a.value().impl().shape, pa, fa) && face_at(placed_b.value().impl().shape, pb, fb)) {
+    if (face_at(placed_a, pa, fa) && face_at(placed_b, pb, fb)) {
       const BRepAdaptor_Surface sa(fa.face), sb(fb.face);
       Extrema_GenLocateExtSS newton(sa, sb, fa.u, fa.v, fb.u, fb.v, 1e-12, 1e-12);
       if (newton.IsDone()) {
