@@ -1,7 +1,6 @@
 #include "engine/pair_verdict.h"
 
 #include "kernel/mesh_distance.h"
-#include "kernel/point_containment.h"
 #include "kernel/tolerances.h"
 #include "occt_adapters/brep_contact.h"
 
@@ -324,10 +323,7 @@ void decide_cad_mesh(const PosedPart& a, const PosedPart& b, bool cad_is_a, doub
     // A point of the CAD part's exact surface (a tessellation vertex) inside the closed mesh.
     const RigidTransform to_mesh = mesh_side.pose.inverse();
     for (const Vec3& p : body_points(cad)) {
-      const Vec3 q = to_mesh.apply(p);
-      // (Several bodies may overlap: the winding number counts each; ray parity would not.)
-      const std::optional<bool> parity = m.body_seeds().size() > 1 ? std::nullopt : point_inside(*mesh_side.part->bvh, q);
-      if (parity.value_or(std::fabs(winding_number(m, q)) > 0.5)) {
+      if (inside_closed_mesh(*mesh_side.part->bvh, to_mesh.apply(p))) {
         set_collision(out, p, "the CAD part lies inside the closed mesh");
         out.error_bound_mm = tolerances::kBrepDistanceErrorMm + rounding;
         out.result.contained = true;

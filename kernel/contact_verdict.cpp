@@ -95,6 +95,13 @@ double winding_number(const TriangleMesh& mesh, const Vec3& point) {
   return total / (4.0 * kPi);
 }
 
+bool inside_closed_mesh(const MeshBvh& mesh, const Vec3& point) {
+  if (!mesh.root_bounds().contains(Aabb{point, point})) return false;
+  if (mesh.mesh().body_seeds().size() == 1)
+    if (const auto parity = point_inside(mesh, point)) return *parity;
+  return std::fabs(winding_number(mesh.mesh(), point)) > 0.5;
+}
+
 Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
                              const RigidTransform& pose_b, const VerdictOptions& options) {
   if (!(options.contact_tolerance_mm >= 0.0) || !std::isfinite(options.contact_tolerance_mm))
@@ -197,16 +204,7 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
     const RigidTransform b_in_a = relative_transform(pose_a, pose_b);
     // Ray parity through the BVH decides it in O(log n); the winding number (O(n)) only when
     // every ray was degenerate.
-    auto inside = [](const MeshBvh& m, const Vec3& p) {
-      // Ray parity is wrong where bodies of one mesh overlap (an assembly of solids: a point in two
-      // of them crosses four surfaces); the winding number counts each body.
-      if (m.mesh().body_seeds().size() > 1) {
-        if (!m.root_bounds().expanded(0.0).contains(Aabb{p, p})) return false;
-        return std::fabs(winding_number(m.mesh(), p)) > 0.5;
-      }
-      if (const auto parity = point_inside(m, p)) return *parity;  // false outside its box at once
-      return std::fabs(winding_number(m.mesh(), p)) > 0.5;
-    };
+    auto inside = [](const MeshBvh& m, const Vec3& p) { return inside_closed_mesh(m, p); };
     auto contained_body = [&](const MeshBvh& container, const MeshBvh& body, const RigidTransform& body_in_container,
                               Vec3& point) {
       if (!container.mesh().is_closed_oriented()) return false;

@@ -91,4 +91,10 @@ bool triangle_pair_crosses(const MeshBvh& a, const RigidTransform& pose_a, std::
 // 0 outside). O(triangles).
 double winding_number(const TriangleMesh& mesh, const Vec3& point);
 
+// Is the point (in the mesh's frame) inside the closed mesh? Ray parity through the BVH, O(log n);
+// the winding number (O(n)) when every ray was degenerate, or when the mesh has several bodies
+// (they may overlap, an assembly of solids: a point in two of them crosses four surfaces and
+// parity calls it outside; the winding number counts each body).
+bool inside_closed_mesh(const MeshBvh& mesh, const Vec3& point);
+
 }  // namespace gk
