@@ -1,5 +1,7 @@
 #include "engine/pair_verdict.h"
 
+#include "engine/number_text.h"
+
 #include "kernel/mesh_distance.h"
 #include "kernel/tolerances.h"
 #include "occt_adapters/brep_contact.h"
@@ -38,13 +40,6 @@ double rounding_bound(const PosedPart& a, const PosedPart& b) {
                                  wb.max.cwiseAbs().maxCoeff(), a.pose.translation.cwiseAbs().maxCoeff(),
                                  b.pose.translation.cwiseAbs().maxCoeff(), 1.0});
   return 1e-12 * scale;
-}
-
-std::string number(double v) {
-  std::ostringstream s;
-  s.precision(6);
-  s << v;
-  return s.str();
 }
 
 // Distinct vertices (world) of one side's triangles among the mesh contacts, plus the mesh's
@@ -92,6 +87,21 @@ void set_clear(PairVerdict& out, double distance_mm, const Vec3& point_a, const 
   r.point_a = point_a;
   r.point_b = point_b;
   r.contacts.clear();
+  r.crossing_pairs = 0;
+  r.first_crossing = -1;
+  r.contained = false;
+  out.decided_on_brep = true;
+}
+
+void set_touching(PairVerdict& out, const Vec3& point_a, const Vec3& point_b, const std::string& reason) {
+  VerdictResult& r = out.result;
+  r.verdict = Verdict::kTouching;
+  r.inconclusive_reason = InconclusiveReason::kNone;
+  r.reason = reason;
+  r.distance_mm = 0.0;
+  r.distance_is_lower_bound = false;
+  r.point_a = point_a;
+  r.point_b = point_b;
   r.crossing_pairs = 0;
   r.first_crossing = -1;
   r.contained = false;
@@ -200,11 +210,25 @@ void decide_cad_pair(const PosedPart& a, const PosedPart& b, double window, doub
       auto second = occt::closest_by_projection(a.part->shape, a.pose, b.part->shape, b.pose, origin, mesh.point_a, mesh.point_b, 6);
       if (second.ok()) {
         disagreement = std::fabs(second.value().distance_mm - d);
-        if (second.value().distance_mm < d) {
+        if (second.value().distance_mm < d - tolerances::kBrepDistanceErrorMm) {  // else keep BRepExtrema's faces
           d = second.value().distance_mm;
           pa = second.value().point_a;
           pb = second.value().point_b;
           out.face_a = out.face_b = 0;
+        }
+      }
+      if (disagreement > tolerances::kBrepDistanceErrorMm) {
+        // BRepExtrema stopped in a local minimum the second search went below (it does, at
+        // factory coordinates): descend from BRepExtrema's own witnesses too. Both starts reaching
+        // the same minimum settle it; otherwise the difference stays in the bound.
+        auto again = occt::closest_by_projection(a.part->shape, a.pose, b.part->shape, b.pose, origin, c.point_a, c.point_b, 0);
+        if (again.ok()) {
+          if (again.value().distance_mm < d - tolerances::kBrepDistanceErrorMm) {
+            d = again.value().distance_mm;
+            pa = again.value().point_a;
+            pb = again.value().point_b;
+          }
+          disagreement = std::min(disagreement, std::fabs(again.value().distance_mm - second.value().distance_mm));
         }
       }
       if (!mesh.distance_is_lower_bound && d > std::max(mesh.distance_mm, 0.0) + window + rounding + tolerances::kBrepDistanceErrorMm) {
@@ -214,7 +238,17 @@ void decide_cad_pair(const PosedPart& a, const PosedPart& b, double window, doub
           return;
         }
         return set_inconclusive(out, InconclusiveReason::kBrepUndecided,
-                                "the exact distance (" + number(d) + " mm) lies outside the tessellation's interval");
+                                "the exact distance (" + number_text(d) + " mm) lies outside the tessellation's interval");
+      }
+      if (d <= tolerances::kContactMm) {
+        // Real surface points within the contact tolerance (the second search reached the
+        // tangency BRepExtrema stopped short of): touching, unless the solids share volume.
+        auto shared = occt::shared_volume(a.part->shape, a.pose, b.part->shape, b.pose, origin);
+        if (!shared.ok())
+          return set_inconclusive(out, InconclusiveReason::kBrepUndecided, "exact faces: " + shared.error().to_string());
+        if (shared.value().volume_mm3 > tolerances::kBrepOverlapVolumeMm3)
+          return set_collision(out, pa, "exact solids share " + number_text(shared.value().volume_mm3) + " mm^3 (Boolean common)");
+        return set_touching(out, pa, pb, "exact faces within the contact tolerance, no shared volume (Boolean common)");
       }
       if (disagreement > tolerances::kBrepDistanceErrorMm) out.error_bound_mm += disagreement;
       if (!mesh_says_apart && d <= window) {
@@ -223,30 +257,19 @@ void decide_cad_pair(const PosedPart& a, const PosedPart& b, double window, doub
         if (!shared.ok())
           return set_inconclusive(out, InconclusiveReason::kBrepUndecided, "exact faces: " + shared.error().to_string());
         if (shared.value().volume_mm3 > tolerances::kBrepOverlapVolumeMm3)
-          return set_collision(out, pa, "exact solids share " + number(shared.value().volume_mm3) + " mm^3 (Boolean common)");
+          return set_collision(out, pa, "exact solids share " + number_text(shared.value().volume_mm3) + " mm^3 (Boolean common)");
       }
       return set_clear(out, d, pa, pb, "exact faces apart");
     }
     case occt::BrepRelation::kTouching:
-      out.result.verdict = Verdict::kTouching;
-      out.result.inconclusive_reason = InconclusiveReason::kNone;
-      out.result.reason = "exact faces touch without a shared volume";
-      out.result.distance_mm = 0.0;
-      out.result.distance_is_lower_bound = false;
-      out.result.point_a = c.point_a;
-      out.result.point_b = c.point_b;
-      out.result.crossing_pairs = 0;
-      out.result.first_crossing = -1;
-      out.result.contained = false;
-      out.decided_on_brep = true;
-      return;
+      return set_touching(out, c.point_a, c.point_b, "exact faces touch without a shared volume");
     case occt::BrepRelation::kOverlapping:
       if (c.nested) {
         set_collision(out, c.point_a, "one solid lies inside the other (exact faces)");
         out.result.contained = true;
         out.result.containment_point = c.point_a;
       } else {
-        set_collision(out, c.point_a, "exact solids share " + number(c.shared_volume_mm3) + " mm^3 (Boolean common)");
+        set_collision(out, c.point_a, "exact solids share " + number_text(c.shared_volume_mm3) + " mm^3 (Boolean common)");
       }
       return;
   }
@@ -417,7 +440,7 @@ Result<PairVerdict> decide_pair(const PosedPart& a, const PosedPart& b, const Pa
   // Never CLEAR with a distance the bound cannot separate from contact.
   if (out.result.verdict == Verdict::kClear && out.result.distance_mm <= out.error_bound_mm)
     set_inconclusive(out, InconclusiveReason::kBrepUndecided,
-                     "the distance (" + number(out.result.distance_mm) + " mm) is within its error bound");
+                     "the distance (" + number_text(out.result.distance_mm) + " mm) is within its error bound");
   return out;
 }
 

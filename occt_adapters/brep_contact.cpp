@@ -1,15 +1,11 @@
 #include "occt_adapters/brep_contact.h"
 
+#include "occt_adapters/face_pair_descent.h"
 #include "occt_adapters/occt_errors.h"
 #include "occt_adapters/shape_builders.h"
 #include "occt_adapters/shape_impl.h"
 
-#include <BRepAdaptor_Surface.hxx>
 #include <BRepAlgoAPI_Common.hxx>
-#include <BRepClass_FaceClassifier.hxx>
-#include <Extrema_GenLocateExtSS.hxx>
-#include <Extrema_POnSurf.hxx>
-#include <gp_Pnt2d.hxx>
 #include <BRepBndLib.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_MakeVertex.hxx>
@@ -23,7 +19,9 @@
 #include <GProp_GProps.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
+#include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
+#include <GeomAPI_ProjectPointOnSurf.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
 
@@ -240,37 +238,35 @@ Result<ProjectedPair> closest_by_projection(const Shape& a, const RigidTransform
       best = d;
     }
     // Alternating projections crawl where the surfaces are nearly parallel (tangent spheres):
-    // Newton on the two faces that hold the points (Extrema_GenLocateExtSS) from their parameters,
-    // accepted only when both points lie on their (trimmed) faces.
-    struct OnFace {
-      TopoDS_Face face;
-      double u = 0.0, v = 0.0;
-    };
-    auto face_at = [&](const TopoDS_Shape& shape, const gp_Pnt& p, OnFace& f) {
+    // a descent on the two faces that hold the points, from their parameters.
+    // The face holding a surface point; a point on an edge or vertex (a sphere's seam or pole,
+    // where BRepExtrema often lands) is taken on the first face around it.
+    auto face_at = [&](const TopoDS_Shape& shape, const gp_Pnt& p, PointOnFace& f) {
       BRepExtrema_DistShapeShape dist(BRepBuilderAPI_MakeVertex(p).Vertex(), shape);
-      if (!dist.IsDone() || dist.NbSolution() < 1 || dist.SupportTypeShape2(1) != BRepExtrema_IsInFace) return false;
-      f.face = TopoDS::Face(dist.SupportOnShape2(1));
-      dist.ParOnFaceS2(1, f.u, f.v);
+      if (!dist.IsDone() || dist.NbSolution() < 1) return false;
+      if (dist.SupportTypeShape2(1) == BRepExtrema_IsInFace) {
+        f.face = TopoDS::Face(dist.SupportOnShape2(1));
+        dist.ParOnFaceS2(1, f.u, f.v);
+        return true;
+      }
+      const TopoDS_Shape support = dist.SupportOnShape2(1);
+      TopTools_IndexedDataMapOfShapeListOfShape faces_around;
+      TopExp::MapShapesAndAncestors(shape, support.ShapeType(), TopAbs_FACE, faces_around);
+      const int index = faces_around.FindIndex(support);
+      if (index < 1 || faces_around(index).IsEmpty()) return false;
+      f.face = TopoDS::Face(faces_around(index).First());
+      GeomAPI_ProjectPointOnSurf projection(dist.PointOnShape2(1), BRep_Tool::Surface(f.face));
+      if (!projection.IsDone() || projection.NbPoints() < 1) return false;
+      projection.LowerDistanceParameters(f.u, f.v);
       return true;
-    };
-    auto inside_face = [](const TopoDS_Face& face, double u, double v) {
-      BRepClass_FaceClassifier classifier(face, gp_Pnt2d(u, v), 1e-9);
-      return classifier.State() == TopAbs_IN || classifier.State() == TopAbs_ON;
     };
     const gp_Pnt pa(out.point_a.x() - frame_origin.x(), out.point_a.y() - frame_origin.y(), out.point_a.z() - frame_origin.z());
     const gp_Pnt pb(out.point_b.x() - frame_origin.x(), out.point_b.y() - frame_origin.y(), out.point_b.z() - frame_origin.z());
-    OnFace fa, fb;
+    PointOnFace fa, fb;
     if (face_at(placed_a, pa, fa) && face_at(placed_b, pb, fb)) {
-      const BRepAdaptor_Surface sa(fa.face), sb(fb.face);
-      Extrema_GenLocateExtSS newton(sa, sb, fa.u, fa.v, fb.u, fb.v, 1e-12, 1e-12);
-      if (newton.IsDone()) {
-        double u1 = 0.0, v1 = 0.0, u2 = 0.0, v2 = 0.0;
-        newton.PointOnS1().Parameter(u1, v1);
-        newton.PointOnS2().Parameter(u2, v2);
-        const double d = std::sqrt(newton.SquareDistance());
-        if (d < out.distance_mm && inside_face(fa.face, u1, v1) && inside_face(fb.face, u2, v2))
-          out = {d, vec(newton.PointOnS1().Value()) + frame_origin, vec(newton.PointOnS2().Value()) + frame_origin};
-      }
+      const FacePairClosest closest = descend_to_closest(fa, fb);
+      if (closest.found && closest.distance_mm < out.distance_mm)
+        out = {closest.distance_mm, vec(closest.point_a) + frame_origin, vec(closest.point_b) + frame_origin};
     }
   });
   if (!ran.ok()) return ran.error();

@@ -1,6 +1,7 @@
 #include "server/clearance_query.h"
 
 #include "engine/exact_depth.h"
+#include "engine/number_text.h"
 #include "engine/pair_verdict.h"
 #include "kernel/contact_regions.h"
 #include "kernel/contact_verdict.h"
@@ -98,7 +99,7 @@ std::string add_depth(const PosedSide& a, const PosedSide& b, const Vec3& along,
     response->set_depth_pieces_a(static_cast<std::uint32_t>(d.pieces_a));
     response->set_depth_pieces_b(static_cast<std::uint32_t>(d.pieces_b));
   }
-  if (!(direction.norm() > 0.0)) {
+  if (!(direction.norm() > 0.0) || (along == Vec3::Zero() && depth == 0.0)) {
     // The tessellations are already free (the exact solids overlap by less than the deflections):
     // B is moved apart along the line between the parts' centres, checked on the exact faces.
     direction = transformed_box(b.part->mesh->bounds(), b.pose).center() - transformed_box(a.part->mesh->bounds(), a.pose).center();
@@ -113,9 +114,8 @@ std::string add_depth(const PosedSide& a, const PosedSide& b, const Vec3& along,
     if (!checked.value().checked)
       method += " (on the tessellation: a CAD part against a mesh is not checked on the exact faces)";
     else
-      method += "; checked free on the exact faces" +
-                (checked.value().extensions > 0 ? " after adding " + std::to_string(checked.value().extensions) +
-                                                      "x the deflections" : std::string());
+      method += "; checked clear on the exact faces" +
+                (checked.value().added_mm > 0.0 ? " after adding " + engine::number_text(checked.value().added_mm) + " mm" : std::string());
   }
   to_proto(direction, response->mutable_depth_direction());
   response->set_depth_mm(checked.value().depth_mm);
@@ -198,7 +198,11 @@ grpc::Status answer_clearance(const pb::ClearanceQueryRequest& request, PartRegi
   std::string not_computed;
   const Vec3 along(request.depth_along().x_mm(), request.depth_along().y_mm(), request.depth_along().z_mm());
   if (!along.allFinite()) return {grpc::StatusCode::INVALID_ARGUMENT, "depth_along: must be finite"};
-  if (interpenetrating && request.compute_depth()) not_computed += add_depth(a, b, along, response);
+  if (interpenetrating && request.compute_depth()) {
+    const std::string why = add_depth(a, b, along, response);
+    if (!why.empty()) response->set_depth_mm(-1.0);  // no depth certified: never a 0 that reads as "free"
+    not_computed += why;
+  }
   if (interpenetrating && request.compute_volume()) not_computed += add_volume(a, b, v.point_a, response);
   response->set_not_computed(not_computed);
   response->set_elapsed_us(us_since(t0));

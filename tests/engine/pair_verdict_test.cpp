@@ -24,6 +24,7 @@ namespace gk::engine {
 namespace {
 
 constexpr double kDeflectionMm = 0.05;
+constexpr double kDegree = 3.14159265358979323846 / 180.0;
 
 std::shared_ptr<PartGeometry> cad_part(const TopoDS_Shape& shape, double deflection_mm = kDeflectionMm) {
   std::ostringstream bytes;
@@ -93,6 +94,70 @@ TEST(CadPairVerdict, SpheresWithinTheTessellationAreDecidedOnTheExactFaces) {
       expect_truth(in_pose.value(), gap, "in pose at " + std::to_string(base) + " gap " + std::to_string(gap));
     }
   }
+}
+
+// Exactly tangent spheres of unequal radii, written at factory coordinates or posed there with
+// rotations: the distance function is flat at the contact (it grows with the square of the offset
+// along the surfaces), so a search that stops a few hundredths of a millimetre early reports a
+// gap of micrometres — a wrong CLEAR. They touch.
+TEST(CadPairVerdict, TangentSpheresOfUnequalSizeTouch) {
+  const double radii[][2] = {{150.0, 1.0}, {150.0, 0.3}, {50.0, 5.0}, {5.0, 50.0}, {20.0, 0.3}};
+  const Vec3 directions[] = {Vec3(0, 0, 1), Vec3(0.3, -0.8, 0.52), Vec3(-0.6, 0.2, -0.77), Vec3(0.1, 0.99, -0.05)};
+  const Vec3 centres[] = {Vec3::Zero(), Vec3(-7344.769087, 39279.28726, -9900.210908), Vec3(49922.41103, 31124.31498, 1300.79623)};
+  int cases = 0, touching = 0;
+  for (const auto& r : radii) {
+    auto at_origin_a = cad_part(sphere(Vec3::Zero(), r[0]));
+    auto at_origin_b = cad_part(sphere(Vec3::Zero(), r[1]));
+    const Vec3 written(50000.0, 31234.5, 1234.25);
+    auto a_far = cad_part(sphere(written, r[0]));
+    auto b_far = cad_part(sphere(written, r[1]));
+    for (const Vec3& c : centres) {
+      auto a = cad_part(sphere(c, r[0]));
+      for (const Vec3& d : directions) {
+        const Vec3 cb = c + (r[0] + r[1]) * d.normalized();
+        auto b = cad_part(sphere(cb, r[1]));
+        const std::string where = "r " + std::to_string(r[0]) + "/" + std::to_string(r[1]) + " at " + std::to_string(c.x());
+        auto in_file = decide_pair({a.get(), {}}, {b.get(), {}});
+        ASSERT_TRUE(in_file.ok()) << in_file.error().to_string();
+        EXPECT_NE(in_file.value().result.verdict, Verdict::kClear) << where << " in file: " << describe(in_file.value());
+        // In the pose, rotated: the parameterisation no longer lines up with the contact.
+        const RigidTransform pa = RigidTransform::from_axis_angle(Vec3(0.94, 0.24, 0.24), -2.47, c);
+        const RigidTransform pb = RigidTransform::from_axis_angle(Vec3(0.71, 0.71, 0), 1.51, cb);
+        auto in_pose = decide_pair({at_origin_a.get(), pa}, {at_origin_b.get(), pb});
+        ASSERT_TRUE(in_pose.ok()) << in_pose.error().to_string();
+        EXPECT_NE(in_pose.value().result.verdict, Verdict::kClear) << where << " in pose: " << describe(in_pose.value());
+        // Both: written far from the origin and posed back there, rotated (a part exported in
+        // another cell's coordinates and placed by the layout).
+        const RigidTransform ra = RigidTransform::from_axis_angle(Vec3(0.942809, 0.235702, 0.235702), -141.7 * kDegree, Vec3::Zero());
+        const RigidTransform rb = RigidTransform::from_axis_angle(Vec3(0.707107, 0.707107, 0), 86.5 * kDegree, Vec3::Zero());
+        const RigidTransform qa = RigidTransform::from_translation(c) * ra * RigidTransform::from_translation(-written);
+        const RigidTransform qb = RigidTransform::from_translation(cb) * rb * RigidTransform::from_translation(-written);
+        auto both = decide_pair({a_far.get(), qa}, {b_far.get(), qb});
+        ASSERT_TRUE(both.ok()) << both.error().to_string();
+        EXPECT_NE(both.value().result.verdict, Verdict::kClear) << where << " in file and pose: " << describe(both.value());
+        for (const auto* v : {&in_file.value(), &in_pose.value(), &both.value()}) touching += v->result.verdict == Verdict::kTouching;
+        cases += 3;
+      }
+    }
+  }
+  EXPECT_EQ(cases, 180);
+  // INCONCLUSIVE would be safe, but a tangency is decidable: nearly all are found touching.
+  EXPECT_GE(touching, 171) << touching << " of " << cases << " touching";
+  // Found by the review: written at (50000, 31234.5, 1234.25), posed rotated, radii 150 and 1.
+  const Vec3 written(50000.0, 31234.5, 1234.25);
+  auto big = cad_part(sphere(written, 150.0));
+  auto small = cad_part(sphere(written, 1.0));
+  const RigidTransform pa = RigidTransform::from_axis_angle(Vec3(0.942809, 0.235702, 0.235702), -141.7 * kDegree,
+                                                            Vec3(-7344.769087, 39279.28726, -9900.210908));
+  // B's centre 151 mm from A's, towards where the review found the contact.
+  const Vec3 towards = Vec3(-137.196, 6.3723, 60.26255).normalized();
+  const RigidTransform turn_b = RigidTransform::from_axis_angle(Vec3(0.707107, 0.707107, 0), 86.5 * kDegree, Vec3::Zero());
+  const RigidTransform pb = RigidTransform::from_translation(pa.apply(written) + 151.0 * towards - turn_b.apply(written)) * turn_b;
+  const double between = (pa.apply(written) - pb.apply(written)).norm();
+  ASSERT_NEAR(between, 151.0, 1e-9);
+  auto v = decide_pair({big.get(), pa}, {small.get(), pb});
+  ASSERT_TRUE(v.ok()) << v.error().to_string();
+  EXPECT_EQ(v.value().result.verdict, Verdict::kTouching) << "true gap " << between - 151.0 << ": " << describe(v.value());
 }
 
 TEST(CadPairVerdict, CylindersSideBySide) {
@@ -173,23 +238,33 @@ TEST(CadPairVerdict, ACadPartAgainstAMeshIsNeverWronglyClear) {
 }
 
 // A depth found on the tessellations frees the tessellations; moved by what check_depth_on_brep
-// reports, the exact spheres are free too (their analytic distance is >= 0).
+// reports, the exact spheres are apart (their analytic distance is > 0) — including overlaps far
+// below the deflection, where the tessellations do not overlap at all and the depth on them is 0.
 TEST(CadDepth, TheReportedDepthFreesTheExactSolids) {
-  auto ball = cad_part(sphere(Vec3::Zero(), 50.0));
-  for (double base : {0.0, 5e4}) {
-    for (double overlap : {0.02, 2.0}) {
-      const Vec3 dir = Vec3(1, 0.3, -0.2).normalized();
-      const RigidTransform pa = RigidTransform::from_translation(Vec3(base, 0, 0));
-      const RigidTransform pb = RigidTransform::from_translation(Vec3(base, 0, 0) + (100.0 - overlap) * dir);
-      auto found = penetration_vector(*ball->bvh, pa, *ball->bvh, pb, 162, 1e-4);
-      ASSERT_TRUE(found.ok());
-      auto checked = check_depth_on_brep({ball.get(), pa}, {ball.get(), pb}, found.value().direction, found.value().depth_mm);
-      ASSERT_TRUE(checked.ok()) << checked.error().to_string();
-      EXPECT_TRUE(checked.value().checked);
-      const Vec3 moved_centre = pb.translation + checked.value().depth_mm * found.value().direction.normalized();
-      EXPECT_GE((moved_centre - pa.translation).norm(), 100.0 - 1e-4)
-          << "overlap " << overlap << " depth " << checked.value().depth_mm << " extensions " << checked.value().extensions;
-      EXPECT_GE(checked.value().depth_mm, overlap - 1e-4);
+  const double radii[][2] = {{50.0, 50.0}, {0.3, 150.0}, {20.0, 1.0}};
+  for (const auto& r : radii) {
+    auto a = cad_part(sphere(Vec3::Zero(), r[0]));
+    auto b = cad_part(sphere(Vec3::Zero(), r[1]));
+    const double touching = r[0] + r[1];
+    for (double base : {0.0, 5e4}) {
+      for (double overlap : {0.0005, 0.003, 0.02, 2.0}) {
+        if (overlap > 0.5 * std::min(r[0], r[1])) continue;
+        const Vec3 dir = Vec3(1, 0.3, -0.2).normalized();
+        const RigidTransform pa = RigidTransform::from_translation(Vec3(base, 0, 0));
+        const RigidTransform pb = RigidTransform::from_translation(Vec3(base, 0, 0) + (touching - overlap) * dir);
+        auto found = penetration_vector(*a->bvh, pa, *b->bvh, pb, 162, 1e-4);
+        ASSERT_TRUE(found.ok());
+        // As the service does: no direction from the triangles (they are free) -> the centres' line.
+        const Vec3 along = found.value().depth_mm > 0.0 ? found.value().direction : dir;
+        auto checked = check_depth_on_brep({a.get(), pa}, {b.get(), pb}, along, found.value().depth_mm);
+        ASSERT_TRUE(checked.ok()) << checked.error().to_string();
+        EXPECT_TRUE(checked.value().checked);
+        const Vec3 moved_centre = pb.translation + checked.value().depth_mm * along.normalized();
+        EXPECT_GT((moved_centre - pa.translation).norm(), touching)
+            << "radii " << r[0] << "/" << r[1] << " overlap " << overlap << " depth " << checked.value().depth_mm
+            << " added " << checked.value().added_mm;
+        EXPECT_GE(checked.value().depth_mm, overlap - 1e-4);
+      }
     }
   }
 }

@@ -92,6 +92,46 @@ TEST(CadVerdictE2E, SpheresOverlappingByLessThanTheTessellationAreCollisions) {
   }
 }
 
+// A depth asked for CAD parts overlapping by less than their tessellations (which do not overlap
+// at all): B moved by the depth along its direction is apart from A (analytic spheres), or the
+// depth is -1 with the reason — never 0 for a collision.
+TEST(CadVerdictE2E, DepthOfSubDeflectionOverlapsFreesTheExactSolids) {
+  Daemon daemon(testing::temp_dir("cad-depth"));
+  auto stub = daemon.stub();
+  const Vec3 written(50000.0, 31234.5, 1234.25);
+  const double ra = 1.0, rb = 5.0;
+  const std::string a = testing::upload_part_id(*stub, sphere_brep(written, ra), "brep");
+  const std::string b = testing::upload_part_id(*stub, sphere_brep(written, rb), "brep");
+  const Vec3 directions[] = {Vec3(0.155, -0.07, 0.985), Vec3(-0.7, 0.7, 0.1), Vec3(0, 0, 1)};
+  for (const Vec3& d : directions) {
+    for (double overlap : {0.0005, 0.003, 0.02}) {
+      // Both written at `written` and posed elsewhere: A's centre at c, B's at c + (ra + rb - overlap) u.
+      const Vec3 c(19740.45, 13146.93, -46034.31), u = d.normalized();
+      const Vec3 cb = c + (ra + rb - overlap) * u;
+      pb::ClearanceQueryRequest request;
+      request.mutable_a()->set_part_id(a);
+      set_translation(c - written, request.mutable_a()->mutable_pose());
+      request.mutable_b()->set_part_id(b);
+      set_translation(cb - written, request.mutable_b()->mutable_pose());
+      request.set_compute_depth(true);
+      grpc::ClientContext ctx;
+      pb::ClearanceQueryResponse r;
+      ASSERT_TRUE(stub->ClearanceQuery(&ctx, request, &r).ok());
+      SCOPED_TRACE("overlap " + std::to_string(overlap) + ": " + describe(r) + " depth " + std::to_string(r.depth_mm()) +
+                   " method " + r.depth_method() + " not computed " + r.not_computed());
+      ASSERT_EQ(r.verdict(), pb::COLLISION);
+      if (r.depth_mm() < 0.0) {
+        EXPECT_FALSE(r.not_computed().empty());
+        continue;
+      }
+      const Vec3 dir(r.depth_direction().x_mm(), r.depth_direction().y_mm(), r.depth_direction().z_mm());
+      const Vec3 moved = cb + r.depth_mm() * dir;
+      EXPECT_GT((moved - c).norm(), ra + rb);
+      EXPECT_FALSE(r.depth_exact());
+    }
+  }
+}
+
 pb::MoveResult move(pb::Gatekeeper::Stub& stub, const std::string& scene, const std::string& object, const Vec3& at,
                     double clearance_mm) {
   pb::MoveObjectRequest request;
