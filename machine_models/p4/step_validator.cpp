@@ -448,15 +448,20 @@ namespace {
 // (for a surface) how deep its vertices lie inside the obstacle.
 double depth_at(const MovingBody& body, const RigidTransform& pose, const ConvexPolytope& obstacle) {
   double depth = 0.0;
+  Aabb obstacle_box;
+  for (const Vec3& v : obstacle.vertices) obstacle_box.extend(v);
   if (!body.plates.empty()) {
-    for (const Plate& p : body.plates)
-      depth = std::max(depth, penetration_depth(ConvexPolytope::plate(p.transformed(pose)), obstacle));
+    // A plate whose box misses the obstacle's is apart from it (depth 0): no SAT needed.
+    for (const Plate& p : body.plates) {
+      Aabb box;
+      for (const Vec3& c : p.corners()) box.extend(pose.apply(c));
+      if (box.overlaps(obstacle_box))
+        depth = std::max(depth, penetration_depth(ConvexPolytope::plate(p.transformed(pose)), obstacle));
+    }
     return depth;
   }
   // A surface: each triangle is convex, and separating the body separates each of them, so the
   // deepest triangle is a lower bound of the body's depth.
-  Aabb obstacle_box;
-  for (const Vec3& v : obstacle.vertices) obstacle_box.extend(v);
   const TriangleMesh& mesh = body.mesh->mesh();
   ConvexPolytope tri;
   tri.vertices.resize(3);
@@ -689,16 +694,26 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
       if (!d.ok()) return d.error();
       double depth = 0.0;
       std::size_t deepest_cup = 0, deepest_feature = 0;
-      for (std::size_t i = 0; i < manipulator->whole.plates.size(); ++i)
+      std::vector<Aabb> part_boxes;
+      for (const Plate& p : part_body->whole.plates) {
+        Aabb box;
+        for (const Vec3& c : p.corners()) box.extend(c);
+        part_boxes.push_back(box);
+      }
+      for (std::size_t i = 0; i < manipulator->whole.plates.size(); ++i) {
+        Aabb cup_box;
+        for (const Vec3& c : manipulator->whole.plates[i].corners()) cup_box.extend(c);
+        const ConvexPolytope cup = ConvexPolytope::plate(manipulator->whole.plates[i]);
         for (std::size_t j = 0; j < part_body->whole.plates.size(); ++j) {
-          const double dij = penetration_depth(ConvexPolytope::plate(manipulator->whole.plates[i]),
-                                               ConvexPolytope::plate(part_body->whole.plates[j]));
+          if (!cup_box.overlaps(part_boxes[j])) continue;  // boxes apart: depth 0, no SAT needed
+          const double dij = penetration_depth(cup, ConvexPolytope::plate(part_body->whole.plates[j]));
           if (dij > depth) {
             depth = dij;
             deepest_cup = i;
             deepest_feature = j;
           }
         }
+      }
       if (depth > tolerances::kIntendedContactMm || (d.value().found && d.value().distance_mm <= contact)) {
         StepCollision col;
         const Vec3 witness = d.value().found ? d.value().point_b : inside_point(part_body->whole, ConvexPolytope::plate(manipulator->whole.plates[deepest_cup]));
