@@ -84,7 +84,14 @@ double hull_gap(const HullPolytope& hull, const SweepOrgan& organ, double sagitt
   organ_points.reserve(om.vertices().size());
   for (const Vec3& v : om.vertices()) organ_points.push_back(organ.pose.apply(v));
   double best = -std::numeric_limits<double>::infinity();
+  // A box's twelve triangles have three directions, a prism's top and bottom one: each direction
+  // (up to sign, which gives the same gap) is projected once. Skipping an axis can only weaken
+  // the bound, never make it wrong.
+  std::vector<Vec3> tried;
   auto separated_along = [&](const Vec3& axis) {
+    for (const Vec3& a : tried)
+      if (std::fabs(a.dot(axis)) > 1.0 - 1e-12) return;
+    tried.push_back(axis);
     const auto [hull_lo, hull_hi] = projection(hull.corners, axis);
     const auto [organ_lo, organ_hi] = projection(organ_points, axis);
     // The sampled hull misses the arcs between samples by at most the sagitta, and only across
@@ -491,7 +498,12 @@ Result<ClearanceBracket> clearance_bracket(const MovingBody& body, const Motion&
   };
   Sample first, last;
   if (auto m = measure(0.0, first); !m.ok()) return m.error();
-  if (auto m = measure(1.0, last); !m.ok()) return m.error();
+  if (rate > 0.0) {
+    if (auto m = measure(1.0, last); !m.ok()) return m.error();
+  } else {
+    last = first;  // nothing moves: the end pose is the start pose
+    last.s = 1.0;
+  }
   std::vector<Interval> open;
   if (rate > 0.0) open.push_back(make(first, last));  // nothing moves: the one measurement is the answer
   while (!open.empty()) {
