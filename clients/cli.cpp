@@ -1,7 +1,7 @@
 // gatekeeper-cli: every gatekeeperd RPC from the command line, requests and replies as JSON
 // (protobuf's JSON mapping of gatekeeper.v1, field names in lowerCamelCase or as in the proto).
 //
-//   gatekeeper-cli [--address 127.0.0.1:50051] server-info
+//   gatekeeper-cli [--address 127.0.0.1:50051] [--tls-ca PEM [--tls-cert PEM --tls-key PEM]] [--token-file F] server-info
 //   gatekeeper-cli machines | machine [ID] | set-state '{"state": {"clampZMm": 1.5}}'
 //   gatekeeper-cli validate-step '{"part": {...}, "step": {"kind": "BEND_UP", ...}}'
 //   gatekeeper-cli validate-steps '{"steps": [...], "stopAtFirstFailure": true}'
@@ -17,6 +17,7 @@
 //   gatekeeper-cli start-audit '{"sceneId": "...", "clearanceMm": 10, "rules": [...]}' | watch-audit JOB | cancel-audit JOB
 //   gatekeeper-cli audit-report JOB [--html report.html]
 // Exit status: 0 on OK, 1 on an RPC error (printed as JSON with its code), 2 on bad usage.
+#include "clients/channel_options.h"
 #include "gatekeeper/v1/gatekeeper.grpc.pb.h"
 
 #include <CLI/CLI.hpp>
@@ -76,10 +77,10 @@ std::string sha256_hex(const std::string& bytes) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string address = "127.0.0.1:50051";
+  gk::clients::ChannelOptions connection;
   double timeout_s = 30.0;
   CLI::App app{"gatekeeper-cli: every gatekeeperd RPC, JSON in and out"};
-  app.add_option("--address", address);
+  connection.add_to(app);
   app.add_option("--timeout", timeout_s, "deadline per call, seconds");
   app.require_subcommand(1);
   std::string json, id, file, name;
@@ -132,7 +133,13 @@ int main(int argc, char** argv) {
 
   grpc::ChannelArguments channel_args;
   channel_args.SetMaxReceiveMessageSize(512 << 20);  // a whole factory's audit report and page
-  auto channel = grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), channel_args);
+  std::shared_ptr<grpc::Channel> channel;
+  try {
+    channel = connection.open(channel_args);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 2;
+  }
   auto stub = pb::Gatekeeper::NewStub(channel);
   grpc::ClientContext ctx;
   ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::milliseconds(static_cast<long>(timeout_s * 1000)));

@@ -6,6 +6,7 @@
 // own time per frame.
 //
 //   gatekeeper-dragbench --address 127.0.0.1:50051 [--objects 2000] [--frames 2000] [--clearance 50]
+#include "clients/channel_options.h"
 #include "gatekeeper/v1/gatekeeper.grpc.pb.h"
 
 #include <CLI/CLI.hpp>
@@ -62,18 +63,24 @@ double pct(std::vector<double> v, double q) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string address = "127.0.0.1:50051";
+  gk::clients::ChannelOptions connection;
   int objects = 2000, frames = 2000;
   double clearance = 50.0;
   CLI::App app{"gatekeeper-dragbench: DragObject frame latency among many static objects"};
-  app.add_option("--address", address);
+  connection.add_to(app);
   app.add_option("--objects", objects)->check(CLI::Range(1, 100000));
   app.add_option("--frames", frames)->check(CLI::Range(1, 1000000));
   app.add_option("--clearance", clearance)->check(CLI::Range(0.0, 1000.0));
   CLI11_PARSE(app, argc, argv);
-  auto channel = grpc::CreateChannel(address, grpc::InsecureChannelCredentials());
+  std::shared_ptr<grpc::Channel> channel;
+  try {
+    channel = connection.open();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 2;
+  }
   if (!channel->WaitForConnected(std::chrono::system_clock::now() + std::chrono::seconds(10))) {
-    std::fprintf(stderr, "cannot connect to %s\n", address.c_str());
+    std::fprintf(stderr, "cannot connect to %s\n", connection.address.c_str());
     return 2;
   }
   auto stub = pb::Gatekeeper::NewStub(channel);

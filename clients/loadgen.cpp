@@ -5,6 +5,7 @@
 //
 // --distinct cycles the requests through that many different bends (flange height and angle), so
 // that 1 measures the memo path and a large number the full pipeline.
+#include "clients/channel_options.h"
 #include "gatekeeper/v1/gatekeeper.grpc.pb.h"
 
 #include <CLI/CLI.hpp>
@@ -44,14 +45,14 @@ pb::ValidateStepRequest request_number(long i) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string address = "127.0.0.1:50051";
+  gk::clients::ChannelOptions connection;
   int concurrency = 1;
   double seconds = 5.0;
   long count = 0;
   long distinct = 1;
   bool json = false;
   CLI::App app{"gatekeeper-loadgen: ValidateStep load with latency histogram and status counts"};
-  app.add_option("--address", address);
+  connection.add_to(app);
   app.add_option("--concurrency", concurrency)->check(CLI::Range(1, 1024));
   app.add_option("--seconds", seconds, "run this long (ignored with --count)")->check(CLI::Range(0.1, 3600.0));
   app.add_option("--count", count, "total calls instead of a duration")->check(CLI::Range(0L, 100000000L));
@@ -65,9 +66,15 @@ int main(int argc, char** argv) {
   for (int c = 0; c < channels; ++c) {
     grpc::ChannelArguments args;
     args.SetInt("grpc.channel_id", c);  // distinct channels, not a shared subchannel
-    auto channel = grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args);
+    std::shared_ptr<grpc::Channel> channel;
+    try {
+      channel = connection.open(args);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s\n", e.what());
+      return 2;
+    }
     if (!channel->WaitForConnected(std::chrono::system_clock::now() + std::chrono::seconds(10))) {
-      std::fprintf(stderr, "cannot connect to %s\n", address.c_str());
+      std::fprintf(stderr, "cannot connect to %s\n", connection.address.c_str());
       return 2;
     }
     stubs.push_back(pb::Gatekeeper::NewStub(channel));
@@ -107,7 +114,7 @@ int main(int argc, char** argv) {
   auto pct = [&](double q) {
     return latencies_us.empty() ? 0.0 : latencies_us[std::min(latencies_us.size() - 1, static_cast<std::size_t>(q * static_cast<double>(latencies_us.size())))];
   };
-  nlohmann::json out = {{"address", address},
+  nlohmann::json out = {{"address", connection.address},
                         {"concurrency", concurrency},
                         {"distinct_requests", distinct},
                         {"calls", latencies_us.size()},

@@ -18,6 +18,8 @@ PACKAGES=(
   # service
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler grpc-proto
   libspdlog-dev libfmt-dev libsqlite3-dev nlohmann-json3-dev libcli11-dev libssl-dev
+  # the access tests make their TLS certificates with the openssl command
+  openssl
   # machine model files
   libtomlplusplus-dev
   # python clients

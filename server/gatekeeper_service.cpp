@@ -1,5 +1,6 @@
 #include "server/gatekeeper_service.h"
 
+#include "server/access_control.h"
 #include "server/clearance_query.h"
 #include "server/proto_convert.h"
 #include "server/rpc_helpers.h"
@@ -274,6 +275,10 @@ grpc::ServerUnaryReactor* GatekeeperService::ClearanceQuery(grpc::CallbackServer
 
 grpc::ServerReadReactor<pb::UploadPartChunk>* GatekeeperService::UploadPart(grpc::CallbackServerContext* ctx,
                                                                            pb::PartInfo* response) {
+  if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) {
+    stats_.record("UploadPart", 0.0, true);
+    return new RefusedStream<grpc::ServerReadReactor<pb::UploadPartChunk>>(allowed);
+  }
   return new UploadReactor(*this, ctx, response);
 }
 
@@ -321,6 +326,7 @@ grpc::ServerUnaryReactor* GatekeeperService::GetMachine(grpc::CallbackServerCont
 grpc::ServerUnaryReactor* GatekeeperService::SetMachineState(grpc::CallbackServerContext* ctx,
                                                              const pb::SetMachineStateRequest* request, pb::MachineInfo* response) {
   return unary(ctx, stats_, "SetMachineState", [&]() -> grpc::Status {
+    if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
     auto m = machines_.get(request->machine_id());
     if (!m.ok()) return grpc::Status(to_status(m.error()));
     auto state = to_state(request->state(), m.value().model);
@@ -334,6 +340,7 @@ grpc::ServerUnaryReactor* GatekeeperService::SetMachineState(grpc::CallbackServe
 grpc::ServerUnaryReactor* GatekeeperService::PutMachineModel(grpc::CallbackServerContext* ctx,
                                                              const pb::PutMachineModelRequest* request, pb::MachineInfo* response) {
   return unary(ctx, stats_, "PutMachineModel", [&]() -> grpc::Status {
+    if (auto allowed = require_role(ctx, Role::kAdmin); !allowed.ok()) return allowed;
     if (auto bad = check_id(request->machine_id(), "machine_id"); !bad.ok()) return to_status(bad.error());
     auto put = machines_.put_model(request->machine_id(), request->model_toml());
     if (!put.ok()) return grpc::Status(to_status(put.error()));

@@ -2,10 +2,15 @@
 //
 //   gatekeeperd [--listen 127.0.0.1:50051] [--data-dir DIR] [--config FILE.toml] [--workers N]
 //               [--queue N] [--audit-jobs N] [--port-file FILE] [--log-level info]
+//               [--tls-cert PEM --tls-key PEM [--tls-client-ca PEM]] [--token-file FILE]
+//
+// Without TLS it serves loopback addresses only (see server/access_control.h). Everything it
+// writes is private to its user: the data directory 0700, files 0600 (umask 077).
 //
 // Starts with the embedded default P4 machine model; health (grpc.health.v1) and reflection
 // (v1alpha) are served; SIGTERM or SIGINT shut it down gracefully (health NOT_SERVING, in-flight
 // calls get --drain-seconds to finish, workers join, storage closes).
+#include "server/access_control.h"
 #include "server/gatekeeper_service.h"
 
 #include <CLI/CLI.hpp>
@@ -18,6 +23,7 @@
 #include <csignal>
 #include <fstream>
 #include <pthread.h>
+#include <sys/stat.h>
 
 namespace {
 
@@ -32,6 +38,7 @@ struct Config {
   int max_uploads = 64;
   double upload_idle_seconds = 60.0;
   int drain_seconds = 5;
+  gk::server::AccessOptions access;
 };
 
 // Values from a TOML config file; flags given on the command line win.
@@ -44,6 +51,10 @@ bool apply_config_file(const std::string& path, Config& c, const CLI::App& app) 
     if (app.count("--queue") == 0) c.queue = t["queue"].value_or(c.queue);
     if (app.count("--audit-jobs") == 0) c.audit_jobs = t["audit_jobs"].value_or(c.audit_jobs);
     if (app.count("--log-level") == 0) c.log_level = t["log_level"].value_or(c.log_level);
+    if (app.count("--tls-cert") == 0) c.access.tls_cert_file = t["tls_cert"].value_or(c.access.tls_cert_file);
+    if (app.count("--tls-key") == 0) c.access.tls_key_file = t["tls_key"].value_or(c.access.tls_key_file);
+    if (app.count("--tls-client-ca") == 0) c.access.tls_client_ca = t["tls_client_ca"].value_or(c.access.tls_client_ca);
+    if (app.count("--token-file") == 0) c.access.token_file = t["token_file"].value_or(c.access.token_file);
     return true;
   } catch (const toml::parse_error& e) {
     spdlog::error("config {}: {}", path, std::string(e.description()));
@@ -71,6 +82,11 @@ int main(int argc, char** argv) {
   app.add_option("--drain-seconds", config.drain_seconds, "on SIGTERM, how long in-flight calls may finish")
       ->check(CLI::Range(0, 600));
   app.add_option("--log-level", config.log_level, "trace, debug, info, warn, error");
+  app.add_option("--tls-cert", config.access.tls_cert_file, "PEM certificate chain: serve TLS (needed beyond loopback)");
+  app.add_option("--tls-key", config.access.tls_key_file, "PEM private key of --tls-cert (mode 0600)");
+  app.add_option("--tls-client-ca", config.access.tls_client_ca, "PEM CA: require client certificates it signed (mutual TLS)");
+  app.add_option("--token-file", config.access.token_file,
+                 "lines \"<read|write|admin> <token>\" (mode 0600): every call needs \"authorization: Bearer <token>\"");
   CLI11_PARSE(app, argc, argv);
   if (!config_file.empty() && !apply_config_file(config_file, config, app)) return 2;
   spdlog::set_level(spdlog::level::from_str(config.log_level));
@@ -81,6 +97,17 @@ int main(int argc, char** argv) {
   sigaddset(&signals, SIGTERM);
   sigaddset(&signals, SIGINT);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  config.access.listen = config.listen;
+  auto credentials = gk::server::server_credentials(config.access);
+  if (!credentials.ok()) {
+    spdlog::error("{}", credentials.error().to_string());
+    return 2;
+  }
+  // Parts, scenes and reports are the customer's: nothing this daemon writes is readable by others.
+  ::umask(077);
+  ::mkdir(config.data_dir.c_str(), 0700);
+  ::chmod(config.data_dir.c_str(), 0700);
 
   auto store = gk::server::PartStore::open(config.data_dir);
   if (!store.ok()) {
@@ -116,7 +143,7 @@ int main(int argc, char** argv) {
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
   int port = 0;
-  builder.AddListeningPort(config.listen, grpc::InsecureServerCredentials(), &port);
+  builder.AddListeningPort(config.listen, credentials.value(), &port);
   builder.RegisterService(&service);
   std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
   if (!server || port == 0) {

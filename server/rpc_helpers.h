@@ -45,6 +45,14 @@ class AdmissionTicket {
   bool admitted_;
 };
 
+// A streaming call refused before it starts: its reactor finishes at once and frees itself.
+template <typename Reactor>
+class RefusedStream final : public Reactor {
+ public:
+  explicit RefusedStream(const grpc::Status& status) { this->Finish(status); }
+  void OnDone() override { delete this; }
+};
+
 // A request id for the log, unique within this process.
 inline std::string next_request_id() {
   static std::atomic<unsigned long long> counter{0};

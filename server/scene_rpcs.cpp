@@ -1,6 +1,8 @@
 // The scene and audit RPCs of GatekeeperService: scenes a layout tool edits and drags objects
 // through, and interference audits of a scene run as jobs.
 #include "server/gatekeeper_service.h"
+
+#include "server/access_control.h"
 #include "server/audit_report.h"
 #include "server/audit_report_page.h"
 #include "server/proto_convert.h"
@@ -129,6 +131,7 @@ class WatchReactor final : public grpc::ServerWriteReactor<pb::AuditProgress> {
 grpc::ServerUnaryReactor* GatekeeperService::CreateScene(grpc::CallbackServerContext* ctx, const pb::CreateSceneRequest* request,
                                                          pb::SceneInfo* response) {
   return unary(ctx, stats_, "CreateScene", [&]() -> grpc::Status {
+    if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
     if (auto bad = check_label(request->name(), "name"); !bad.ok()) return to_status(bad.error());
     auto scene = scenes_.create(request->name());
     if (!scene.ok()) return grpc::Status(to_status(scene.error()));
@@ -183,6 +186,7 @@ grpc::ServerUnaryReactor* GatekeeperService::PutObject(grpc::CallbackServerConte
                                                        pb::MoveResult* response) {
   const auto t0 = Clock::now();
   return unary(ctx, stats_, "PutObject", [&]() -> grpc::Status {
+    if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
     const pb::SceneObject& in = request->object();
     if (auto bad = check_object(in, "object"); !bad.ok()) return to_status(bad.error());
     auto part = parts_.store().get(in.part_id());
@@ -201,6 +205,7 @@ grpc::ServerUnaryReactor* GatekeeperService::PutObject(grpc::CallbackServerConte
 grpc::ServerUnaryReactor* GatekeeperService::PutObjects(grpc::CallbackServerContext* ctx, const pb::PutObjectsRequest* request,
                                                         pb::PutObjectsResponse* response) {
   return unary(ctx, stats_, "PutObjects", [&]() -> grpc::Status {
+    if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
     // Every object is checked before anything is stored, so a bad one leaves the scene as it was.
     std::vector<SceneObjectRecord> objects;
     std::set<std::string> known_parts;
@@ -227,17 +232,23 @@ grpc::ServerUnaryReactor* GatekeeperService::PutObjects(grpc::CallbackServerCont
 grpc::ServerUnaryReactor* GatekeeperService::MoveObject(grpc::CallbackServerContext* ctx, const pb::MoveObjectRequest* request,
                                                         pb::MoveResult* response) {
   return unary(ctx, stats_, "MoveObject", [&]() -> grpc::Status {
+    if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
     return grpc::Status(move(*request, response));
   });
 }
 
-grpc::ServerBidiReactor<pb::MoveObjectRequest, pb::MoveResult>* GatekeeperService::DragObject(grpc::CallbackServerContext*) {
+grpc::ServerBidiReactor<pb::MoveObjectRequest, pb::MoveResult>* GatekeeperService::DragObject(grpc::CallbackServerContext* ctx) {
+  if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) {
+    stats_.record("DragObject", 0.0, true);
+    return new RefusedStream<grpc::ServerBidiReactor<pb::MoveObjectRequest, pb::MoveResult>>(allowed);
+  }
   return new DragReactor(*this);
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::DeleteObject(grpc::CallbackServerContext* ctx, const pb::DeleteObjectRequest* request,
                                                           pb::SceneInfo* response) {
   return unary(ctx, stats_, "DeleteObject", [&]() -> grpc::Status {
+    if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
     auto scene = scenes_.remove(request->scene_id(), request->object_id());
     if (!scene.ok()) return grpc::Status(to_status(scene.error()));
     scene_to_proto(scene.value(), response);
@@ -258,6 +269,7 @@ grpc::ServerUnaryReactor* GatekeeperService::GetScene(grpc::CallbackServerContex
 grpc::ServerUnaryReactor* GatekeeperService::StartAudit(grpc::CallbackServerContext* ctx, const pb::StartAuditRequest* request,
                                                         pb::AuditJob* response) {
   const auto t0 = Clock::now();
+  if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return finish(ctx, stats_, "StartAudit", t0, allowed);
   auto checked = to_audit_options(*request, options_.audit_threads);
   if (!checked.ok()) return finish(ctx, stats_, "StartAudit", t0, to_status(checked.error()));
   auto scene = scenes_.get(request->scene_id());
@@ -321,6 +333,7 @@ grpc::ServerWriteReactor<pb::AuditProgress>* GatekeeperService::WatchAudit(grpc:
 grpc::ServerUnaryReactor* GatekeeperService::CancelAudit(grpc::CallbackServerContext* ctx, const pb::CancelAuditRequest* request,
                                                          pb::AuditProgress* response) {
   return unary(ctx, stats_, "CancelAudit", [&]() -> grpc::Status {
+    if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
     auto job = audits_.get(request->job_id());
     if (!job.ok()) return grpc::Status(to_status(job.error()));
     job.value()->cancel();

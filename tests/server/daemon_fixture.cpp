@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -43,11 +44,16 @@ std::string read_file(const std::string& path) {
   return s.str();
 }
 
-Daemon::Daemon(const std::string& data_dir, std::vector<std::string> extra_args) {
+Daemon::Daemon(const std::string& data_dir, std::vector<std::string> extra_args,
+               std::shared_ptr<grpc::ChannelCredentials> credentials, grpc::ChannelArguments channel_args) {
   const std::string port_file = data_dir + "/port";
   std::filesystem::remove(port_file);
-  std::vector<std::string> args = {GATEKEEPERD_PATH, "--listen", "127.0.0.1:0", "--data-dir", data_dir,
-                                   "--port-file", port_file, "--log-level", "warn", "--drain-seconds", "1"};
+  std::vector<std::string> args = {GATEKEEPERD_PATH, "--data-dir", data_dir, "--port-file", port_file,
+                                   "--log-level", "warn", "--drain-seconds", "1"};
+  if (std::find(extra_args.begin(), extra_args.end(), "--listen") == extra_args.end()) {
+    args.push_back("--listen");
+    args.push_back("127.0.0.1:0");
+  }
   args.insert(args.end(), extra_args.begin(), extra_args.end());
   pid_ = ::fork();
   if (pid_ == 0) {
@@ -68,7 +74,7 @@ Daemon::Daemon(const std::string& data_dir, std::vector<std::string> extra_args)
     ADD_FAILURE() << "gatekeeperd did not start";
     return;
   }
-  channel_ = grpc::CreateChannel(address(), grpc::InsecureChannelCredentials());
+  channel_ = grpc::CreateCustomChannel(address(), credentials ? credentials : grpc::InsecureChannelCredentials(), channel_args);
   EXPECT_TRUE(channel_->WaitForConnected(std::chrono::system_clock::now() + std::chrono::seconds(10)));
 }
 

@@ -15,7 +15,9 @@ namespace gk::testing {
 class Daemon {
  public:
   // Starts gatekeeperd; data_dir is created if needed. Fails the test if it does not come up.
-  explicit Daemon(const std::string& data_dir, std::vector<std::string> extra_args = {});
+  // The channel uses `credentials` (default: plain, which loopback accepts).
+  explicit Daemon(const std::string& data_dir, std::vector<std::string> extra_args = {},
+                  std::shared_ptr<grpc::ChannelCredentials> credentials = nullptr, grpc::ChannelArguments channel_args = {});
   ~Daemon();  // SIGTERM, then waits
 
   int port() const { return port_; }

@@ -10,7 +10,7 @@ import os
 import sys
 import time
 
-from gatekeeper_client.connection import connect, pb
+from gatekeeper_client.connection import add_connection_arguments, connect_from_arguments, pb
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULT_DATA = os.environ.get("GATEKEEPER_SHARED_DATA", os.path.normpath(os.path.join(HERE, "..", "..", "..", "..", "shared", "data")))
@@ -41,11 +41,11 @@ def progress_bar(p, width=30):
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--address", default="127.0.0.1:50051")
+    add_connection_arguments(parser)
     parser.add_argument("--data", default=DEFAULT_DATA)
     parser.add_argument("--report", help="write the audit report page (HTML) here")
     args = parser.parse_args(argv)
-    stub, _ = connect(args.address)
+    stub, _ = connect_from_arguments(args)
     robot = upload(stub, os.path.join(args.data, "meshes", "fcl", "rob.obj"))
     motor = upload(stub, os.path.join(args.data, "meshes", "occt", "motor.stl"))
     print(f"uploaded robot ({robot.triangles} triangles) and motor ({motor.triangles} triangles)")

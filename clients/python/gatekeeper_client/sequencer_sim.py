@@ -11,7 +11,7 @@ import sys
 import time
 import tomllib
 
-from gatekeeper_client.connection import connect, pb
+from gatekeeper_client.connection import add_connection_arguments, connect_from_arguments, pb
 
 SIDES = {"Y_MAX": pb.Y_MAX, "Y_MIN": pb.Y_MIN, "X_MAX": pb.X_MAX, "X_MIN": pb.X_MIN}
 
@@ -168,10 +168,10 @@ def sample_parts():
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--address", default="127.0.0.1:50051")
+    add_connection_arguments(parser)
     parser.add_argument("--orders", type=int, default=6, help="bend orders tried per part")
     args = parser.parse_args(argv)
-    stub, _ = connect(args.address)
+    stub, _ = connect_from_arguments(args)
     machine = stub.GetMachine(pb.GetMachineRequest(), timeout=5.0)
     model = tomllib.loads(machine.model_toml)
     widths = model["aba"]["segment_widths_mm"]
