@@ -6,6 +6,7 @@
 
 #include "engine/part_geometry.h"
 #include "kernel/status.h"
+#include "kernel/stop_token.h"
 
 namespace gk::engine {
 
@@ -18,6 +19,8 @@ struct CheckedDepth {
 // Tries the depth, then the depth plus growing steps (the contact tolerance up to 8 times the
 // pair's deflection window, the sum of both deflections); the first at which the exact-face
 // verdict is CLEAR is reported. An error when none is (the depth is then not certified).
-Result<CheckedDepth> check_depth_on_brep(const PosedPart& a, const PosedPart& b, const Vec3& direction, double depth_mm);
+// Asks `stop` between trials.
+Result<CheckedDepth> check_depth_on_brep(const PosedPart& a, const PosedPart& b, const Vec3& direction, double depth_mm,
+                                         const StopToken& stop = {});
 
 }  // namespace gk::engine

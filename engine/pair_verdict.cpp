@@ -190,8 +190,7 @@ void decide_cad_pair(const PosedPart& a, const PosedPart& b, double window, doub
   }
   if (mesh_says_apart && !faces.value().complete && !must_measure) return;
   const std::vector<std::pair<int, int>> pairs = faces.value().complete ? faces.value().pairs : std::vector<std::pair<int, int>>{};
-  auto exact = occt::decide_brep_contact(a.part->shape, a.pose, b.part->shape, b.pose, origin, pairs, tolerances::kContactMm,
-                                         tolerances::kBrepOverlapVolumeMm3);
+  auto exact = occt::decide_brep_contact(a.part->shape, a.pose, b.part->shape, b.pose, origin, pairs, tolerances::kContactMm);
   if (!exact.ok()) {
     if (mesh_says_apart) return;
     return set_inconclusive(out, InconclusiveReason::kBrepUndecided, "exact faces: " + exact.error().to_string());
@@ -246,7 +245,7 @@ void decide_cad_pair(const PosedPart& a, const PosedPart& b, double window, doub
         auto shared = occt::shared_volume(a.part->shape, a.pose, b.part->shape, b.pose, origin);
         if (!shared.ok())
           return set_inconclusive(out, InconclusiveReason::kBrepUndecided, "exact faces: " + shared.error().to_string());
-        if (shared.value().volume_mm3 > tolerances::kBrepOverlapVolumeMm3)
+        if (shared.value().crossing())
           return set_collision(out, pa, "exact solids share " + number_text(shared.value().volume_mm3) + " mm^3 (Boolean common)");
         return set_touching(out, pa, pb, "exact faces within the contact tolerance, no shared volume (Boolean common)");
       }
@@ -256,7 +255,7 @@ void decide_cad_pair(const PosedPart& a, const PosedPart& b, double window, doub
         auto shared = occt::shared_volume(a.part->shape, a.pose, b.part->shape, b.pose, origin);
         if (!shared.ok())
           return set_inconclusive(out, InconclusiveReason::kBrepUndecided, "exact faces: " + shared.error().to_string());
-        if (shared.value().volume_mm3 > tolerances::kBrepOverlapVolumeMm3)
+        if (shared.value().crossing())
           return set_collision(out, pa, "exact solids share " + number_text(shared.value().volume_mm3) + " mm^3 (Boolean common)");
       }
       return set_clear(out, d, pa, pb, "exact faces apart");

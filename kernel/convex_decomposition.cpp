@@ -104,7 +104,7 @@ Result<ConvexDecomposition> approximate_convex_decomposition(const TriangleMesh&
   };
   std::vector<Patch> patches;
   if (!all.empty()) patches.push_back({all, piece_of_patch(mesh, all)});
-  while (static_cast<int>(patches.size()) < options.max_pieces) {
+  while (static_cast<int>(patches.size()) < options.max_pieces && !(options.stop && options.stop->stop_requested())) {
     // Split the deepest patch that can be split.
     std::size_t worst = patches.size();
     for (std::size_t i = 0; i < patches.size(); ++i)

@@ -8,6 +8,7 @@
 #include "kernel/convex_hull.h"
 #include "kernel/rigid_transform.h"
 #include "kernel/status.h"
+#include "kernel/stop_token.h"
 #include "kernel/triangle_mesh.h"
 
 #include <vector>
@@ -30,6 +31,9 @@ struct DecompositionOptions {
   // Only triangles whose box meets this region take part (the rest cannot matter to a query
   // confined to it); an empty region means the whole mesh.
   Aabb region;
+  // Asked between splits; when it says stop, the pieces so far are returned (coarser, still a
+  // cover of the mesh).
+  const StopToken* stop = nullptr;
 };
 
 struct ConvexDecomposition {

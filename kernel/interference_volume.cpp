@@ -90,8 +90,9 @@ std::vector<char> cells_crossed_by_edges(const MeshBvh& m, const RigidTransform&
   return marked;
 }
 
+// `stopped` is set (and the estimate left incomplete) when `stop` asks between rows.
 VolumeEstimate cast_rays(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b, const RigidTransform& pose_b,
-                         const Vec3& lo, const Vec3& hi, int n) {
+                         const Vec3& lo, const Vec3& hi, int n, const StopToken& stop, bool& stopped_early) {
   VolumeEstimate out;
   const double dx = (hi.x() - lo.x()) / n, dy = (hi.y() - lo.y()) / n;
   out.cell_mm = std::max(dx, dy);
@@ -106,6 +107,10 @@ VolumeEstimate cast_rays(const MeshBvh& a, const RigidTransform& pose_a, const M
   double total = 0.0;
   std::size_t edged_cells = 0;
   for (int i = 0; i < n; ++i) {
+    if (stop.stop_requested()) {
+      stopped_early = true;
+      return out;
+    }
     for (int j = 0; j < n; ++j) {
       const bool has_edge = edged[static_cast<std::size_t>(i) * n + j] != 0;
       edged_cells += has_edge ? 1 : 0;
@@ -135,7 +140,7 @@ VolumeEstimate cast_rays(const MeshBvh& a, const RigidTransform& pose_a, const M
 }  // namespace
 
 Result<VolumeEstimate> interference_volume(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
-                                           const RigidTransform& pose_b, int cells_per_axis) {
+                                           const RigidTransform& pose_b, int cells_per_axis, const StopToken& stop) {
   if (!a.mesh().is_closed_oriented()) return invalid_argument("a", "volume needs a closed, consistently oriented mesh");
   if (!b.mesh().is_closed_oriented()) return invalid_argument("b", "volume needs a closed, consistently oriented mesh");
   if (cells_per_axis < 4 || cells_per_axis > 4096) return invalid_argument("cells_per_axis", "must be in [4, 4096]");
@@ -147,11 +152,13 @@ Result<VolumeEstimate> interference_volume(const MeshBvh& a, const RigidTransfor
   // A grid too coarse for the overlap (few rays inside it: a corner, a sliver) is refined while the
   // bound exceeds 1 % of the volume, up to kMaxRays rays. Where many rays cross the overlap the
   // bound is dominated by the triangle edges' projections and refining buys little.
-  VolumeEstimate out = cast_rays(a, pose_a, b, pose_b, lo, hi, cells_per_axis);
-  for (int n = cells_per_axis * 2; n <= 4096 && static_cast<double>(n) * n <= kMaxRays; n *= 2) {
+  bool stopped_early = false;
+  VolumeEstimate out = cast_rays(a, pose_a, b, pose_b, lo, hi, cells_per_axis, stop, stopped_early);
+  for (int n = cells_per_axis * 2; n <= 4096 && static_cast<double>(n) * n <= kMaxRays && !stopped_early; n *= 2) {
     if (out.error_bound_mm3 <= kTargetRelativeError * out.volume_mm3 || out.rays_in_overlap >= kResolvedRays) break;
-    out = cast_rays(a, pose_a, b, pose_b, lo, hi, n);
+    out = cast_rays(a, pose_a, b, pose_b, lo, hi, n, stop, stopped_early);
   }
+  if (stopped_early) return stopped("the interference volume");
   return out;
 }
 

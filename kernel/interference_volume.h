@@ -14,6 +14,7 @@
 #include "kernel/mesh_bvh.h"
 #include "kernel/rigid_transform.h"
 #include "kernel/status.h"
+#include "kernel/stop_token.h"
 
 namespace gk {
 
@@ -26,7 +27,8 @@ struct VolumeEstimate {
 };
 
 // Both meshes must be closed and consistently oriented; cells_per_axis in [4, 4096]: the first grid.
+// Asks `stop` between rows of rays: kStopped when it says so.
 Result<VolumeEstimate> interference_volume(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
-                                           const RigidTransform& pose_b, int cells_per_axis = 256);
+                                           const RigidTransform& pose_b, int cells_per_axis = 256, const StopToken& stop = {});
 
 }  // namespace gk

@@ -30,7 +30,8 @@ struct PieceAxes {
   bool both_convex_whole = false;  // each mesh is one convex piece covering all of it
 };
 
-Result<PieceAxes> piece_axes(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b, const RigidTransform& pose_b) {
+Result<PieceAxes> piece_axes(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b, const RigidTransform& pose_b,
+                             const StopToken& stop) {
   const Aabb box_a = transformed_box(a.root_bounds(), pose_a), box_b = transformed_box(b.root_bounds(), pose_b);
   Aabb overlap{box_a.min.cwiseMax(box_b.min), box_a.max.cwiseMin(box_b.max)};
   PieceAxes out;
@@ -38,6 +39,7 @@ Result<PieceAxes> piece_axes(const MeshBvh& a, const RigidTransform& pose_a, con
   overlap = overlap.expanded(tolerances::kContactMm);
   DecompositionOptions oa, ob;
   oa.max_pieces = ob.max_pieces = kMaxPiecesPerMesh;
+  oa.stop = ob.stop = &stop;
   const bool whole_a = a.mesh().triangle_count() <= kWholeMeshTriangles;
   const bool whole_b = b.mesh().triangle_count() <= kWholeMeshTriangles;
   if (!whole_a) oa.region = transformed_box(overlap, pose_a.inverse());
@@ -89,7 +91,7 @@ Result<bool> already_free(const MeshBvh& a, const RigidTransform& pose_a, const 
 
 // B, known not to be free, moved along unit u: the largest translation at which it still touches A.
 Result<DepthAlong> advance_back(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b, const RigidTransform& pose_b,
-                                const Vec3& u, double tolerance_mm) {
+                                const Vec3& u, double tolerance_mm, const StopToken& stop = {}) {
   DepthAlong out;
   const Aabb box_a = transformed_box(a.root_bounds(), pose_a), box_b = transformed_box(b.root_bounds(), pose_b);
   // A translation along u that surely separates the boxes.
@@ -103,6 +105,7 @@ Result<DepthAlong> advance_back(const MeshBvh& a, const RigidTransform& pose_a, 
   double t = std::max(0.0, hi_a - lo_b) + 1.0;
   // Back along -u by conservative advancement until the surfaces meet.
   for (out.steps = 0; out.steps < 100000; ++out.steps) {
+    if (out.steps % 16 == 15 && stop.stop_requested()) return stopped("advancing along one direction");
     RigidTransform moved = pose_b;
     moved.translation += t * u;
     auto d = distance(a, pose_a, b, moved);
@@ -245,7 +248,9 @@ std::optional<double> first_free_translation(const MeshBvh& a, const RigidTransf
 }  // namespace
 
 Result<DepthAlong> penetration_along(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
-                                     const RigidTransform& pose_b, const Vec3& direction, double tolerance_mm) {
+                                     const RigidTransform& pose_b, const Vec3& direction, double tolerance_mm,
+                                     const StopToken& stop) {
+  if (stop.stop_requested()) return stopped("the depth along a direction");
   if (!direction.allFinite() || !(direction.norm() > 0.0)) return invalid_argument("direction", "must be a non-zero vector");
   if (!(tolerance_mm > 0.0)) return invalid_argument("tolerance_mm", "must be positive");
   auto free = already_free(a, pose_a, b, pose_b);
@@ -254,7 +259,7 @@ Result<DepthAlong> penetration_along(const MeshBvh& a, const RigidTransform& pos
   // The last exit is free (everything beyond it is); a free stretch may come earlier (B leaving
   // through a cavity of A): the first free position is what "how far B must move" means.
   const Vec3 u = direction.normalized();
-  auto last = advance_back(a, pose_a, b, pose_b, u, tolerance_mm);
+  auto last = advance_back(a, pose_a, b, pose_b, u, tolerance_mm, stop);
   if (!last.ok()) return last;
   DepthAlong out = last.value();
   out.last_exit_mm = out.depth_mm;
@@ -265,12 +270,14 @@ Result<DepthAlong> penetration_along(const MeshBvh& a, const RigidTransform& pos
 }
 
 Result<DepthVector> penetration_vector(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
-                                       const RigidTransform& pose_b, int samples, double tolerance_mm) {
+                                       const RigidTransform& pose_b, int samples, double tolerance_mm,
+                                       const StopToken& stop) {
   if (samples < 6 || samples > 100000) return invalid_argument("samples", "must be in [6, 100000]");
   DepthVector best;
   best.depth_mm = std::numeric_limits<double>::infinity();
-  auto axes = piece_axes(a, pose_a, b, pose_b);
+  auto axes = piece_axes(a, pose_a, b, pose_b, stop);
   if (!axes.ok()) return axes.error();
+  if (stop.stop_requested()) return stopped("the convex pieces for the penetration depth");
   best.pieces_a = axes.value().pieces_a;
   best.pieces_b = axes.value().pieces_b;
   best.max_concavity_mm = axes.value().max_concavity_mm;
@@ -297,7 +304,19 @@ Result<DepthVector> penetration_vector(const MeshBvh& a, const RigidTransform& p
     return best;
   }
   for (std::size_t i = 0; i < candidates.size(); ++i) {
-    auto d = advance_back(a, pose_a, b, pose_b, candidates[i].normalized(), tolerance_mm);
+    if (stop.stop_requested()) {
+      // The best so far is still a certified upper bound (B moved by it is free), only less tight.
+      if (best.directions_tried > 0 && std::isfinite(best.depth_mm)) {
+        best.stopped_early = true;
+        break;
+      }
+      return stopped("the penetration depth (no direction tried)");
+    }
+    auto d = advance_back(a, pose_a, b, pose_b, candidates[i].normalized(), tolerance_mm, stop);
+    if (!d.ok() && d.error().code == ErrorCode::kStopped && best.directions_tried > 0 && std::isfinite(best.depth_mm)) {
+      best.stopped_early = true;  // this direction unfinished; the ones before it stand
+      break;
+    }
     if (!d.ok()) return d.error();
     ++best.directions_tried;
     if (d.value().depth_mm < best.depth_mm) {
@@ -307,7 +326,7 @@ Result<DepthVector> penetration_vector(const MeshBvh& a, const RigidTransform& p
     }
     if (best.depth_mm == 0.0) break;
   }
-  best.exact = axes.value().both_convex_whole && best.depth_mm > 0.0;
+  best.exact = axes.value().both_convex_whole && best.depth_mm > 0.0 && !best.stopped_early;
   // A Fibonacci lattice of n points leaves every direction within about sqrt(4 pi / n) radians
   // (times a small constant) of a sample.
   best.max_angle_between_samples_deg = 180.0 / kPi * 2.0 * std::sqrt(4.0 * kPi / samples);

@@ -18,6 +18,7 @@
 #include "kernel/mesh_bvh.h"
 #include "kernel/rigid_transform.h"
 #include "kernel/status.h"
+#include "kernel/stop_token.h"
 
 namespace gk {
 
@@ -31,7 +32,8 @@ struct DepthAlong {
 
 // direction: unit-length not required (normalised); tolerance_mm: contact resolution.
 Result<DepthAlong> penetration_along(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
-                                     const RigidTransform& pose_b, const Vec3& direction, double tolerance_mm = 1e-6);
+                                     const RigidTransform& pose_b, const Vec3& direction, double tolerance_mm = 1e-6,
+                                     const StopToken& stop = {});
 
 struct DepthVector {
   Vec3 direction = Vec3::Zero();  // unit; the translation of B is depth_mm * direction
@@ -43,10 +45,14 @@ struct DepthVector {
   double max_concavity_mm = 0.0;  // the decomposition's deepest piece (either mesh)
   bool exact = false;             // both meshes convex and closed: depth_mm is the true minimum
   double max_angle_between_samples_deg = 0.0;
+  bool stopped_early = false;     // asked to stop: not every direction was tried (still an upper bound)
 };
 
 // The smallest depth over the convex pieces' axes and `samples` lattice directions.
+// Asks `stop` between directions: when it says so, the best found so far (stopped_early), or
+// kStopped if no direction was tried yet.
 Result<DepthVector> penetration_vector(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
-                                       const RigidTransform& pose_b, int samples = 162, double tolerance_mm = 1e-6);
+                                       const RigidTransform& pose_b, int samples = 162, double tolerance_mm = 1e-6,
+                                       const StopToken& stop = {});
 
 }  // namespace gk

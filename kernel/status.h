@@ -8,7 +8,8 @@
 
 namespace gk {
 
-enum class ErrorCode { kInvalidArgument, kNotFound, kFailedPrecondition, kInternal };
+// kStopped: the caller asked to stop (a deadline passed, the call was cancelled): no answer.
+enum class ErrorCode { kInvalidArgument, kNotFound, kFailedPrecondition, kInternal, kStopped };
 
 struct Error {
   ErrorCode code = ErrorCode::kInvalidArgument;
@@ -21,6 +22,8 @@ struct Error {
 inline Error invalid_argument(std::string field, std::string message) {
   return {ErrorCode::kInvalidArgument, std::move(field), std::move(message)};
 }
+
+inline Error stopped(std::string what) { return {ErrorCode::kStopped, "", "stopped by the caller during " + std::move(what)}; }
 
 template <typename T>
 class [[nodiscard]] Result {

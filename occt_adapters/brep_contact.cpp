@@ -1,11 +1,15 @@
 #include "occt_adapters/brep_contact.h"
 
+#include "kernel/tolerances.h"
+
 #include "occt_adapters/face_pair_descent.h"
 #include "occt_adapters/occt_errors.h"
 #include "occt_adapters/shape_builders.h"
 #include "occt_adapters/shape_impl.h"
 
+#include <BRepAdaptor_Curve.hxx>
 #include <BRepAlgoAPI_Common.hxx>
+#include <BRepAlgoAPI_Section.hxx>
 #include <BRepBndLib.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_MakeVertex.hxx>
@@ -101,8 +105,55 @@ std::vector<TopoDS_Shape> solids_of(const TopoDS_Shape& shape) {
 // overlapping solids is not (one common of the whole compounds called a shared 8000 mm^3 a touch).
 // Solids of one assembly that overlap each other are counted once per pair. False when a Boolean
 // failed.
-bool common_volume(const TopoDS_Shape& a, const TopoDS_Shape& b, double& volume, double& error_estimate) {
-  volume = error_estimate = 0.0;
+// Where the two boundaries cross, the section curve rings the region each solid pushes into the
+// other; the deepest point of that region lies under the ring's middle. The middle of each ring
+// (and of the whole section) is projected onto both surfaces, and a projection the classifier puts
+// inside the other solid by more than half the contact tolerance proves the crossing — when the Boolean
+// common comes back empty (it does, for a small ball a few micrometres into a torus).
+bool surface_point_inside_where_crossing(const TopoDS_Shape& a, const TopoDS_Shape& b, gp_Pnt& found) {
+  BRepAlgoAPI_Section section(a, b, false);
+  section.ComputePCurveOn1(false);
+  section.ComputePCurveOn2(false);
+  section.Approximation(false);
+  section.Build();
+  if (!section.IsDone() || section.HasErrors()) return false;
+  std::vector<gp_XYZ> middles;
+  gp_XYZ all(0, 0, 0);
+  int all_count = 0;
+  for (TopExp_Explorer e(section.Shape(), TopAbs_EDGE); e.More(); e.Next()) {
+    BRepAdaptor_Curve curve(TopoDS::Edge(e.Current()));
+    gp_XYZ sum(0, 0, 0);
+    constexpr int kSamples = 16;
+    for (int k = 0; k < kSamples; ++k) {
+      const double t = curve.FirstParameter() + (curve.LastParameter() - curve.FirstParameter()) * (k + 0.5) / kSamples;
+      sum += curve.Value(t).XYZ();
+    }
+    middles.push_back(sum / kSamples);
+    all += sum;
+    all_count += kSamples;
+  }
+  if (all_count == 0) return false;  // the boundaries do not cross (tangent, or apart)
+  middles.push_back(all / all_count);
+  for (const gp_XYZ& m : middles) {
+    for (int side = 0; side < 2; ++side) {
+      const TopoDS_Shape& on = side == 0 ? a : b;
+      const TopoDS_Shape& into = side == 0 ? b : a;
+      BRepExtrema_DistShapeShape nearest(BRepBuilderAPI_MakeVertex(gp_Pnt(m)).Vertex(), on);
+      if (!nearest.IsDone() || nearest.NbSolution() < 1) continue;
+      const gp_Pnt q = nearest.PointOnShape2(1);
+      // Half the tolerance: the overlap's depth is shared between the two caps, so one of them
+      // reaches at least half of it into the other solid.
+      if (inside_a_solid(into, q, 0.25 * tolerances::kContactMm)) {
+        found = q;
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
+bool common_volume(const TopoDS_Shape& a, const TopoDS_Shape& b, SharedVolume& out) {
+  out = SharedVolume{};
   for (const TopoDS_Shape& sa : solids_of(a)) {
     Bnd_Box box_a;
     BRepBndLib::Add(sa, box_a);
@@ -116,8 +167,19 @@ bool common_volume(const TopoDS_Shape& a, const TopoDS_Shape& b, double& volume,
         GProp_GProps props;
         // With a requested precision OCCT integrates adaptively and returns its relative error estimate.
         const double relative = BRepGProp::VolumeProperties(e.Current(), props, 1e-9);
-        volume += std::fabs(props.Mass());
-        error_estimate += std::fabs(relative * props.Mass());
+        const double volume = std::fabs(props.Mass());
+        out.volume_mm3 += volume;
+        out.error_estimate_mm3 += std::fabs(relative * volume);
+        GProp_GProps surface;
+        BRepGProp::SurfaceProperties(e.Current(), surface);
+        if (surface.Mass() > 0.0) out.thickness_mm = std::max(out.thickness_mm, 2.0 * volume / surface.Mass());
+      }
+      if (!out.crossing()) {
+        gp_Pnt p;
+        if (surface_point_inside_where_crossing(sa, sb, p)) {
+          out.surface_point_inside = true;
+          out.point_inside = vec(p);
+        }
       }
     }
   }
@@ -126,10 +188,14 @@ bool common_volume(const TopoDS_Shape& a, const TopoDS_Shape& b, double& volume,
 
 }  // namespace
 
+bool SharedVolume::crossing() const {
+  return surface_point_inside || volume_mm3 > tolerances::kBrepOverlapVolumeMm3 ||
+         (volume_mm3 > 0.0 && thickness_mm > tolerances::kBrepCrossingThicknessMm);
+}
+
 Result<BrepContact> decide_brep_contact(const Shape& a, const RigidTransform& pose_a, const Shape& b,
                                         const RigidTransform& pose_b, const Vec3& frame_origin,
-                                        const std::vector<std::pair<int, int>>& face_pairs, double touch_mm,
-                                        double overlap_volume_mm3) {
+                                        const std::vector<std::pair<int, int>>& face_pairs, double touch_mm) {
   if (!frame_origin.allFinite()) return invalid_argument("frame_origin", "must be finite");
   auto placed = place_pair(a, pose_a, b, pose_b, frame_origin);
   if (!placed.ok()) return placed.error();
@@ -176,9 +242,11 @@ Result<BrepContact> decide_brep_contact(const Shape& a, const RigidTransform& po
     }
     // Boundaries meet: a shared volume means they cross.
     out.used_boolean = true;
-    double estimate = 0.0;
-    if (!common_volume(sa, sb, out.shared_volume_mm3, estimate)) return void(failure = "BRepAlgoAPI_Common failed");
-    out.relation = out.shared_volume_mm3 > overlap_volume_mm3 ? BrepRelation::kOverlapping : BrepRelation::kTouching;
+    SharedVolume shared;
+    if (!common_volume(sa, sb, shared)) return void(failure = "BRepAlgoAPI_Common failed");
+    out.shared_volume_mm3 = shared.volume_mm3;
+    out.relation = shared.crossing() ? BrepRelation::kOverlapping : BrepRelation::kTouching;
+    if (shared.surface_point_inside) out.point_a = out.point_b = shared.point_inside + frame_origin;
     out.distance_mm = 0.0;
   });
   if (!ran.ok()) return ran.error();
@@ -195,7 +263,8 @@ Result<SharedVolume> shared_volume(const Shape& a, const RigidTransform& pose_a,
   SharedVolume out;
   bool failed = false;
   auto ran = guarded("shapes", "Boolean common", [&] {
-    failed = !common_volume(placed_a, placed_b, out.volume_mm3, out.error_estimate_mm3);
+    failed = !common_volume(placed_a, placed_b, out);
+    if (out.surface_point_inside) out.point_inside += frame_origin;
   });
   if (!ran.ok()) return ran.error();
   if (failed) return Error{ErrorCode::kInternal, "shapes", "BRepAlgoAPI_Common failed"};

@@ -32,20 +32,29 @@ struct BrepContact {
   bool used_boolean = false;
 };
 
-// The two shapes at their poses. `face_pairs` (1-based, a's then b's) restricts the distance to the
-// pairs that can hold the minimum; empty: all faces. Boundaries closer than touch_mm are touching or
-// crossing, told apart by a Boolean common (solid by solid) with a volume above overlap_volume_mm3.
-Result<BrepContact> decide_brep_contact(const Shape& a, const RigidTransform& pose_a, const Shape& b,
-                                        const RigidTransform& pose_b, const Vec3& frame_origin,
-                                        const std::vector<std::pair<int, int>>& face_pairs, double touch_mm,
-                                        double overlap_volume_mm3);
-
-// The volume the two solids share at their poses (Boolean common in the local frame) [mm^3], and
-// OCCT's estimate of its integration error.
+// The volume two solids share (Boolean common, solid by solid) [mm^3], OCCT's estimate of its
+// integration error, and how thick the common is on average (the largest of its solids' 2 V / A).
+// When that does not show a crossing, the boundaries' section is examined: a point of either
+// surface found inside the other solid (beyond the contact tolerance) where they cross.
 struct SharedVolume {
   double volume_mm3 = 0.0;
   double error_estimate_mm3 = 0.0;
+  double thickness_mm = 0.0;
+  bool surface_point_inside = false;
+  Vec3 point_inside = Vec3::Zero();  // that point, in the frame the shapes were placed in
+  // Crossing rather than touching: more volume than tolerances::kBrepOverlapVolumeMm3, a common
+  // thicker than tolerances::kBrepCrossingThicknessMm, or a surface point inside the other solid.
+  bool crossing() const;
 };
+
+// The two shapes at their poses. `face_pairs` (1-based, a's then b's) restricts the distance to the
+// pairs that can hold the minimum; empty: all faces. Boundaries closer than touch_mm are touching or
+// crossing, told apart by a Boolean common (solid by solid, SharedVolume::crossing).
+Result<BrepContact> decide_brep_contact(const Shape& a, const RigidTransform& pose_a, const Shape& b,
+                                        const RigidTransform& pose_b, const Vec3& frame_origin,
+                                        const std::vector<std::pair<int, int>>& face_pairs, double touch_mm);
+
+// The volume the two solids share at their poses (Boolean common in the local frame).
 Result<SharedVolume> shared_volume(const Shape& a, const RigidTransform& pose_a, const Shape& b, const RigidTransform& pose_b,
                                    const Vec3& frame_origin);
 

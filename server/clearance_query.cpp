@@ -24,6 +24,8 @@ constexpr std::size_t kMaxReportedPairs = 100000;
 constexpr double kDefaultRegionMergeMm = 10.0;
 // Depth: lattice size and contact resolution [mm] of the advancement along each candidate.
 constexpr int kDepthLatticeDirections = 162;
+// How long the search over directions may run before the best found so far is reported [us].
+constexpr double kDepthBudgetUs = 2.0e6;
 constexpr double kDepthResolutionMm = 1e-4;
 constexpr int kVolumeRaysPerAxis = 256;
 
@@ -75,26 +77,33 @@ void add_regions(const std::vector<ProximityPair>& pairs, double merge_mm, const
 }
 
 // The depth on the triangles, then (CAD parts) checked free on the exact faces.
-std::string add_depth(const PosedSide& a, const PosedSide& b, const Vec3& along, pb::ClearanceQueryResponse* response) {
+std::string add_depth(const PosedSide& a, const PosedSide& b, const Vec3& along, const StopToken& stop,
+                      pb::ClearanceQueryResponse* response) {
   const engine::PosedPart pa{a.part.get(), a.pose}, pb_{b.part.get(), b.pose};
   double depth = 0.0;
   Vec3 direction = Vec3::Zero();
   std::string method;
   bool exact = false;
   if (along != Vec3::Zero()) {
-    auto d = penetration_along(*a.part->bvh, a.pose, *b.part->bvh, b.pose, along, kDepthResolutionMm);
+    auto d = penetration_along(*a.part->bvh, a.pose, *b.part->bvh, b.pose, along, kDepthResolutionMm, stop);
     if (!d.ok()) return "depth: " + d.error().to_string() + "; ";
     depth = d.value().depth_mm;
     direction = along.normalized();
     method = "along the requested direction";
   } else {
-    auto found = penetration_vector(*a.part->bvh, a.pose, *b.part->bvh, b.pose, kDepthLatticeDirections, kDepthResolutionMm);
+    // The directions are tried within a time budget (or until the caller gives up): every one
+    // tried gives a freeing depth, so the best so far is still a certified upper bound.
+    const auto started = Clock::now();
+    const StopToken budget([&] { return stop.stop_requested() || us_since(started) > kDepthBudgetUs; });
+    auto found = penetration_vector(*a.part->bvh, a.pose, *b.part->bvh, b.pose, kDepthLatticeDirections, kDepthResolutionMm, budget);
     if (!found.ok()) return "depth: " + found.error().to_string() + "; ";
     const DepthVector& d = found.value();
     depth = d.depth_mm;
     direction = d.direction;
     exact = d.exact;
     method = d.from_piece_axis ? "convex-piece or part axis" : "lattice direction";
+    if (d.stopped_early)
+      method += " (time budget: " + std::to_string(d.directions_tried) + " directions tried)";
     response->set_depth_max_angle_deg(d.max_angle_between_samples_deg);
     response->set_depth_pieces_a(static_cast<std::uint32_t>(d.pieces_a));
     response->set_depth_pieces_b(static_cast<std::uint32_t>(d.pieces_b));
@@ -107,7 +116,7 @@ std::string add_depth(const PosedSide& a, const PosedSide& b, const Vec3& along,
     direction.normalize();
     method = "between the parts' centres";
   }
-  auto checked = engine::check_depth_on_brep(pa, pb_, direction, depth);
+  auto checked = engine::check_depth_on_brep(pa, pb_, direction, depth, stop);
   if (!checked.ok()) return "depth: " + checked.error().message + "; ";
   if (engine::deflection_window(pa, pb_) > 0.0) {
     exact = false;  // found on a tessellation, not on the parts
@@ -124,7 +133,8 @@ std::string add_depth(const PosedSide& a, const PosedSide& b, const Vec3& along,
   return "";
 }
 
-std::string add_volume(const PosedSide& a, const PosedSide& b, const Vec3& near_point, pb::ClearanceQueryResponse* response) {
+std::string add_volume(const PosedSide& a, const PosedSide& b, const Vec3& near_point, const StopToken& stop,
+                       pb::ClearanceQueryResponse* response) {
   std::string why_not_brep;
   if (a.is_cad() && b.is_cad()) {
     // In a frame local to the overlap: OCCT's Booleans lose overlaps at factory coordinates.
@@ -138,7 +148,7 @@ std::string add_volume(const PosedSide& a, const PosedSide& b, const Vec3& near_
     }
     why_not_brep = " (the Boolean common failed: " + exact.error().message + ")";
   }
-  auto volume = interference_volume(*a.part->bvh, a.pose, *b.part->bvh, b.pose, kVolumeRaysPerAxis);
+  auto volume = interference_volume(*a.part->bvh, a.pose, *b.part->bvh, b.pose, kVolumeRaysPerAxis, stop);
   if (!volume.ok())
     return "volume: " + volume.error().to_string() + " (an open or non-manifold mesh has no inside)" + why_not_brep;
   response->set_interference_volume_mm3(volume.value().volume_mm3);
@@ -151,7 +161,7 @@ std::string add_volume(const PosedSide& a, const PosedSide& b, const Vec3& near_
 }  // namespace
 
 grpc::Status answer_clearance(const pb::ClearanceQueryRequest& request, PartRegistry& parts, SceneStore& scenes,
-                              pb::ClearanceQueryResponse* response) {
+                              const StopToken& stop, pb::ClearanceQueryResponse* response) {
   const auto t0 = Clock::now();
   if (!std::isfinite(request.safety_gap_mm()) || request.safety_gap_mm() < 0.0)
     return {grpc::StatusCode::INVALID_ARGUMENT, "safety_gap_mm: must be a finite, non-negative distance"};
@@ -199,11 +209,13 @@ grpc::Status answer_clearance(const pb::ClearanceQueryRequest& request, PartRegi
   const Vec3 along(request.depth_along().x_mm(), request.depth_along().y_mm(), request.depth_along().z_mm());
   if (!along.allFinite()) return {grpc::StatusCode::INVALID_ARGUMENT, "depth_along: must be finite"};
   if (interpenetrating && request.compute_depth()) {
-    const std::string why = add_depth(a, b, along, response);
+    const std::string why = add_depth(a, b, along, stop, response);
     if (!why.empty()) response->set_depth_mm(-1.0);  // no depth certified: never a 0 that reads as "free"
     not_computed += why;
   }
-  if (interpenetrating && request.compute_volume()) not_computed += add_volume(a, b, v.point_a, response);
+  if (interpenetrating && request.compute_volume()) not_computed += add_volume(a, b, v.point_a, stop, response);
+  // The caller gave up (deadline, cancel): the work stopped where it was, and nobody reads this.
+  if (stop.stop_requested()) return {grpc::StatusCode::DEADLINE_EXCEEDED, "stopped: the deadline passed or the call was cancelled"};
   response->set_not_computed(not_computed);
   response->set_elapsed_us(us_since(t0));
   return grpc::Status::OK;

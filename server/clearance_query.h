@@ -4,6 +4,7 @@
 #pragma once
 
 #include "gatekeeper/v1/gatekeeper.pb.h"
+#include "kernel/stop_token.h"
 #include "server/part_registry.h"
 #include "server/scene_store.h"
 
@@ -13,7 +14,8 @@ namespace gk::server {
 
 namespace pb = ::gatekeeper::v1;
 
-grpc::Status answer_clearance(const pb::ClearanceQueryRequest& request, PartRegistry& parts, SceneStore& scenes,
+// Long parts (depth, volume) ask `stop` as they go.
+grpc::Status answer_clearance(const pb::ClearanceQueryRequest& request, PartRegistry& parts, SceneStore& scenes, const StopToken& stop,
                               pb::ClearanceQueryResponse* response);
 
 }  // namespace gk::server

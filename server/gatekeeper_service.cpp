@@ -249,8 +249,9 @@ grpc::ServerUnaryReactor* GatekeeperService::ValidateSteps(grpc::CallbackServerC
   });
 }
 
-grpc::Status GatekeeperService::clearance(const pb::ClearanceQueryRequest& request, pb::ClearanceQueryResponse* response) {
-  return answer_clearance(request, parts_, scenes_, response);
+grpc::Status GatekeeperService::clearance(const pb::ClearanceQueryRequest& request, const StopToken& stop,
+                                          pb::ClearanceQueryResponse* response) {
+  return answer_clearance(request, parts_, scenes_, stop, response);
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::ClearanceQuery(grpc::CallbackServerContext* ctx,
@@ -262,7 +263,10 @@ grpc::ServerUnaryReactor* GatekeeperService::ClearanceQuery(grpc::CallbackServer
     grpc::Status status;
     if (ctx->IsCancelled()) status = {grpc::StatusCode::CANCELLED, "cancelled by the client"};
     else if (past_deadline(ctx)) status = {grpc::StatusCode::DEADLINE_EXCEEDED, "deadline passed while queued"};
-    else status = guarded_status("ClearanceQuery", [&] { return clearance(*request, response); });
+    else {
+      const StopToken stop([ctx] { return ctx->IsCancelled() || past_deadline(ctx); });
+      status = guarded_status("ClearanceQuery", [&] { return clearance(*request, stop, response); });
+    }
     stats_.record("ClearanceQuery", us_since(t0), !status.ok());
     reactor->Finish(status);
   });

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "gatekeeper/v1/gatekeeper.grpc.pb.h"
+#include "kernel/stop_token.h"
 #include "server/answer_cache.h"
 #include "server/audit_archive.h"
 #include "server/machine_registry.h"
@@ -100,7 +101,7 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
                             const std::string& default_machine, pb::ValidateStepResponse* response);
   grpc::Status validate_one_unguarded(const pb::ValidateStepRequest& request, const pb::SheetPart* default_part,
                             const std::string& default_machine, pb::ValidateStepResponse* response);
-  grpc::Status clearance(const pb::ClearanceQueryRequest& request, pb::ClearanceQueryResponse* response);
+  grpc::Status clearance(const pb::ClearanceQueryRequest& request, const StopToken& stop, pb::ClearanceQueryResponse* response);
   grpc::Status machine_info(const std::string& id, pb::MachineInfo* response);
  public:
   // A move of one object (unary, or one message of a drag): stored, then its contacts; a drag

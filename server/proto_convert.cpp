@@ -24,6 +24,7 @@ grpc::Status to_status(const Error& error) {
     case ErrorCode::kNotFound: return {grpc::StatusCode::NOT_FOUND, message};
     case ErrorCode::kFailedPrecondition: return {grpc::StatusCode::FAILED_PRECONDITION, message};
     case ErrorCode::kInternal: return {grpc::StatusCode::INTERNAL, message};
+    case ErrorCode::kStopped: return {grpc::StatusCode::DEADLINE_EXCEEDED, message};
   }
   return {grpc::StatusCode::INTERNAL, message};
 }

@@ -208,6 +208,47 @@ TEST(HostileClientE2E, RunningAuditsDoNotDelayAClearanceQuery) {
 
 // Upload streams are bounded in number and in idle time (1,100 idle header-only streams exhausted
 // the descriptors): beyond the cap they are refused, an idle one is cancelled, health answers.
+// A deadline stops the work it paid for: a depth query between two large meshes pushed deep into
+// each other (seconds of conservative advancement) is abandoned when its 200 ms deadline passes,
+// and the single worker is free for the next query at once.
+TEST(HostileClientE2E, ADeadlineStopsTheDepthSearch) {
+  Daemon daemon(testing::temp_dir("deadline"), {"--workers", "1"});
+  auto stub = daemon.stub();
+  const std::string a = testing::upload_part_id(*stub, testing::read_file(testing::shared_data("meshes/occt/TR12J_OCC64K.stl")), "stl");
+  pb::ClearanceQueryRequest deep;
+  deep.mutable_a()->set_part_id(a);
+  deep.mutable_b()->set_part_id(a);  // the part against itself, shifted: deep in each other everywhere
+  deep.mutable_b()->mutable_pose()->mutable_translation()->set_x_mm(3.0);
+  deep.mutable_b()->mutable_pose()->mutable_translation()->set_y_mm(2.0);
+  deep.set_compute_depth(true);
+  deep.set_compute_volume(true);
+  const auto t0 = std::chrono::steady_clock::now();
+  {
+    grpc::ClientContext ctx;
+    ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::milliseconds(200));
+    pb::ClearanceQueryResponse out;
+    const grpc::Status status = stub->ClearanceQuery(&ctx, deep, &out);
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::DEADLINE_EXCEEDED) << status.error_message();
+  }
+  // The worker gave it up: a plain query right after is answered well within its own deadline.
+  pb::ClearanceQueryRequest plain = deep;
+  plain.set_compute_depth(false);
+  plain.set_compute_volume(false);
+  grpc::ClientContext ctx;
+  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::milliseconds(1500));
+  pb::ClearanceQueryResponse out;
+  const grpc::Status status = stub->ClearanceQuery(&ctx, plain, &out);
+  EXPECT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(out.verdict(), pb::COLLISION);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 2.5);
+  // Without a deadline the same depth query completes (what the deadline cut short was real work).
+  grpc::ClientContext full_ctx;
+  pb::ClearanceQueryResponse full;
+  ASSERT_TRUE(stub->ClearanceQuery(&full_ctx, deep, &full).ok());
+  EXPECT_GT(full.depth_mm(), 0.0);
+  EXPECT_GT(full.elapsed_us(), 200000.0) << "the depth query is too quick to show that a deadline stops it";
+}
+
 TEST(HostileClientE2E, IdleUploadStreamsAreCappedAndReaped) {
   Daemon daemon(testing::temp_dir("hostile-uploads"), {"--max-uploads", "8", "--upload-idle-seconds", "1"});
   auto stub = daemon.stub();
