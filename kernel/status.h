@@ -23,7 +23,8 @@ inline Error invalid_argument(std::string field, std::string message) {
   return {ErrorCode::kInvalidArgument, std::move(field), std::move(message)};
 }
 
-inline Error stopped(std::string what) { return {ErrorCode::kStopped, "", "stopped by the caller during " + std::move(what)}; }
+// The caller asked to stop (a deadline, a cancel, or its own time budget) during `what`.
+inline Error stopped(std::string what) { return {ErrorCode::kStopped, "", "stopped (deadline, cancellation or time budget) during " + std::move(what)}; }
 
 template <typename T>
 class [[nodiscard]] Result {

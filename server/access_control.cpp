@@ -15,8 +15,9 @@
 namespace gk::server {
 namespace {
 
-constexpr char kRoleProperty[] = "gatekeeper-role";
 constexpr std::size_t kMinTokenLength = 16;
+constexpr char kAuthorization[] = "authorization";
+constexpr char kBearer[] = "Bearer ";
 
 using Digest = std::array<unsigned char, SHA256_DIGEST_LENGTH>;
 
@@ -42,6 +43,24 @@ struct TokenEntry {
   Digest digest;
   Role role;
 };
+
+// The tokens this process was configured with (set once, before serving); null: none.
+std::shared_ptr<const std::vector<TokenEntry>>& configured_tokens() {
+  static std::shared_ptr<const std::vector<TokenEntry>> tokens;
+  return tokens;
+}
+
+// The entry of an "authorization" header's bearer token, or null. Every entry is compared, in
+// constant time, so timing tells nothing about the tokens.
+const TokenEntry* entry_of(const std::vector<TokenEntry>& tokens, const std::string& header) {
+  const std::string prefix = kBearer;
+  if (header.compare(0, prefix.size(), prefix) != 0) return nullptr;
+  const Digest presented = digest_of(header.data() + prefix.size(), header.size() - prefix.size());
+  const TokenEntry* match = nullptr;
+  for (const TokenEntry& t : tokens)
+    if (CRYPTO_memcmp(t.digest.data(), presented.data(), presented.size()) == 0) match = &t;
+  return match;
+}
 
 Result<std::vector<TokenEntry>> read_tokens(const std::string& path) {
   auto text = read_private_file(path, "token_file", true);
@@ -70,33 +89,25 @@ Result<std::vector<TokenEntry>> read_tokens(const std::string& path) {
   return out;
 }
 
-// Runs before every call (health checks included): the bearer token's role goes into the call's
-// auth context, where handlers read it.
+// Runs before every call (health checks included) and refuses those without a known token. The
+// role is not stored here: gRPC keeps an auth context per connection, and one connection carries
+// the calls of every token a client (or proxy) holds — each call's own header decides its role
+// (require_role), so the header is left in the call's metadata.
 class TokenCheck final : public grpc::AuthMetadataProcessor {
  public:
-  explicit TokenCheck(std::vector<TokenEntry> tokens) : tokens_(std::move(tokens)) {}
+  explicit TokenCheck(std::shared_ptr<const std::vector<TokenEntry>> tokens) : tokens_(std::move(tokens)) {}
   bool IsBlocking() const override { return false; }
 
-  grpc::Status Process(const InputMetadata& metadata, grpc::AuthContext* context, OutputMetadata* consumed,
-                       OutputMetadata*) override {
-    const auto found = metadata.find("authorization");
+  grpc::Status Process(const InputMetadata& metadata, grpc::AuthContext*, OutputMetadata*, OutputMetadata*) override {
+    const auto found = metadata.find(kAuthorization);
     if (found == metadata.end()) return {grpc::StatusCode::UNAUTHENTICATED, "a bearer token is required (authorization: Bearer <token>)"};
-    const std::string value(found->second.data(), found->second.size());
-    const std::string prefix = "Bearer ";
-    if (value.compare(0, prefix.size(), prefix) != 0) return {grpc::StatusCode::UNAUTHENTICATED, "authorization: expected \"Bearer <token>\""};
-    const Digest presented = digest_of(value.data() + prefix.size(), value.size() - prefix.size());
-    // Every entry is compared, in constant time, so timing tells nothing about the tokens.
-    const TokenEntry* match = nullptr;
-    for (const TokenEntry& t : tokens_)
-      if (CRYPTO_memcmp(t.digest.data(), presented.data(), presented.size()) == 0) match = &t;
-    if (!match) return {grpc::StatusCode::UNAUTHENTICATED, "unknown bearer token"};
-    context->AddProperty(kRoleProperty, to_string(match->role));
-    consumed->insert({"authorization", value});
+    if (!entry_of(*tokens_, std::string(found->second.data(), found->second.size())))
+      return {grpc::StatusCode::UNAUTHENTICATED, "unknown bearer token (expected authorization: Bearer <token>)"};
     return grpc::Status::OK;
   }
 
  private:
-  std::vector<TokenEntry> tokens_;
+  std::shared_ptr<const std::vector<TokenEntry>> tokens_;
 };
 
 }  // namespace
@@ -137,6 +148,9 @@ Result<std::shared_ptr<grpc::ServerCredentials>> server_credentials(const Access
     if (!key.ok()) return key.error();
     grpc::SslServerCredentialsOptions ssl;
     ssl.pem_key_cert_pairs.push_back({key.value(), cert.value()});
+    if (!is_loopback_listen_address(options.listen) && options.tls_client_ca.empty() && options.token_file.empty())
+      return invalid_argument("listen", options.listen + " is beyond loopback: TLS alone lets anybody call; require client "
+                                                         "certificates (--tls-client-ca) or bearer tokens (--token-file)");
     if (!options.tls_client_ca.empty()) {
       auto ca = read_private_file(options.tls_client_ca, "tls_client_ca", false);
       if (!ca.ok()) return ca.error();
@@ -156,21 +170,23 @@ Result<std::shared_ptr<grpc::ServerCredentials>> server_credentials(const Access
     auto tokens = read_tokens(options.token_file);
     if (!tokens.ok()) return tokens.error();
     spdlog::info("bearer tokens required ({} configured)", tokens.value().size());
-    creds->SetAuthMetadataProcessor(std::make_shared<TokenCheck>(std::move(tokens).value()));
+    configured_tokens() = std::make_shared<const std::vector<TokenEntry>>(std::move(tokens).value());
+    creds->SetAuthMetadataProcessor(std::make_shared<TokenCheck>(configured_tokens()));
   }
   return creds;
 }
 
 grpc::Status require_role(const grpc::CallbackServerContext* ctx, Role needed) {
-  const auto auth = ctx->auth_context();
-  if (!auth) return grpc::Status::OK;
-  const auto values = auth->FindPropertyValues(kRoleProperty);
-  if (values.empty()) return grpc::Status::OK;  // no tokens configured
-  const std::string have(values.front().data(), values.front().size());
-  const Role role = have == "admin" ? Role::kAdmin : have == "write" ? Role::kWrite : Role::kRead;
-  if (static_cast<int>(role) >= static_cast<int>(needed)) return grpc::Status::OK;
+  const auto tokens = configured_tokens();
+  if (!tokens) return grpc::Status::OK;  // no tokens: loopback or client certificates decide who connects
+  const auto& metadata = ctx->client_metadata();
+  const auto found = metadata.find(kAuthorization);
+  const TokenEntry* entry =
+      found == metadata.end() ? nullptr : entry_of(*tokens, std::string(found->second.data(), found->second.size()));
+  if (!entry) return {grpc::StatusCode::UNAUTHENTICATED, "a known bearer token is required"};
+  if (static_cast<int>(entry->role) >= static_cast<int>(needed)) return grpc::Status::OK;
   return {grpc::StatusCode::PERMISSION_DENIED,
-          std::string("this call needs the ") + to_string(needed) + " role; the token has " + to_string(role)};
+          std::string("this call needs the ") + to_string(needed) + " role; the token has " + to_string(entry->role)};
 }
 
 }  // namespace gk::server

@@ -4,10 +4,12 @@
 // - Without TLS the daemon listens on loopback addresses only (gRPC's local credentials refuse
 //   any other peer), so an unconfigured daemon is never open to a shop network.
 // - With --tls-cert/--tls-key it serves TLS; with --tls-client-ca also it requires a client
-//   certificate signed by that CA (mutual TLS).
+//   certificate signed by that CA (mutual TLS). Beyond loopback TLS needs client certificates or
+//   tokens (TLS alone would let anybody call).
 // - With --token-file every call must carry "authorization: Bearer <token>"; the token's role
 //   decides what it may do. A call without a known token is UNAUTHENTICATED before any handler
-//   runs; a handler needing a higher role answers PERMISSION_DENIED.
+//   runs; a handler needing a higher role answers PERMISSION_DENIED. Each call's own header
+//   decides (one connection may carry the calls of several tokens).
 #pragma once
 
 #include "kernel/status.h"

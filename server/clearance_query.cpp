@@ -8,6 +8,7 @@
 #include "kernel/interference_volume.h"
 #include "kernel/mesh_distance.h"
 #include "kernel/penetration_depth.h"
+#include "kernel/tolerances.h"
 #include "occt_adapters/brep_contact.h"
 #include "server/proto_convert.h"
 #include "server/rpc_helpers.h"
@@ -96,7 +97,11 @@ std::string add_depth(const PosedSide& a, const PosedSide& b, const Vec3& along,
     const auto started = Clock::now();
     const StopToken budget([&] { return stop.stop_requested() || us_since(started) > kDepthBudgetUs; });
     auto found = penetration_vector(*a.part->bvh, a.pose, *b.part->bvh, b.pose, kDepthLatticeDirections, kDepthResolutionMm, budget);
-    if (!found.ok()) return "depth: " + found.error().to_string() + "; ";
+    if (!found.ok()) {
+      if (found.error().code == ErrorCode::kStopped && !stop.stop_requested())
+        return "depth: the search's 2 s budget ran out before any direction was finished (" + found.error().message + "); ";
+      return "depth: " + found.error().to_string() + "; ";
+    }
     const DepthVector& d = found.value();
     depth = d.depth_mm;
     direction = d.direction;
@@ -139,6 +144,13 @@ std::string add_volume(const PosedSide& a, const PosedSide& b, const Vec3& near_
   if (a.is_cad() && b.is_cad()) {
     // In a frame local to the overlap: OCCT's Booleans lose overlaps at factory coordinates.
     auto exact = occt::shared_volume(a.part->shape, a.pose, b.part->shape, b.pose, near_point);
+    if (exact.ok() && exact.value().volume_mm3 <= tolerances::kBrepOverlapVolumeMm3) {
+      // The verdict found them crossing, but the common holds (almost) nothing: a lens too small
+      // for OCCT's Boolean to build. No figure rather than a 0 that reads as exact.
+      response->set_interference_volume_mm3(-1.0);
+      return "volume: the Boolean common lost the overlap (" + engine::number_text(exact.value().volume_mm3) +
+             " mm^3: a crossing of micrometres); ";
+    }
     if (exact.ok()) {
       response->set_interference_volume_mm3(exact.value().volume_mm3);
       response->set_volume_error_bound_mm3(exact.value().error_estimate_mm3);

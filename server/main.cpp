@@ -21,6 +21,7 @@
 #include <toml++/toml.h>
 
 #include <csignal>
+#include <filesystem>
 #include <fstream>
 #include <pthread.h>
 #include <sys/stat.h>
@@ -108,6 +109,16 @@ int main(int argc, char** argv) {
   ::umask(077);
   ::mkdir(config.data_dir.c_str(), 0700);
   ::chmod(config.data_dir.c_str(), 0700);
+  {
+    // What an earlier run (or another tool) left in it is closed too; links are not followed.
+    std::error_code ec;
+    for (auto it = std::filesystem::recursive_directory_iterator(config.data_dir, ec);
+         !ec && it != std::filesystem::recursive_directory_iterator(); it.increment(ec)) {
+      if (it->is_symlink(ec)) continue;
+      std::filesystem::permissions(it->path(), std::filesystem::perms::group_all | std::filesystem::perms::others_all,
+                                   std::filesystem::perm_options::remove | std::filesystem::perm_options::nofollow, ec);
+    }
+  }
 
   auto store = gk::server::PartStore::open(config.data_dir);
   if (!store.ok()) {

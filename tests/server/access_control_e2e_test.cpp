@@ -139,6 +139,28 @@ TEST(AccessControlE2E, TokensDecideWhoMayReadWriteAndAdminister) {
   EXPECT_NE(by_admin.error_code(), grpc::StatusCode::UNAUTHENTICATED);
 }
 
+// One connection carries the calls of several tokens (a proxy, or channels sharing a connection,
+// gRPC's default): each call's own token decides, never the first one seen on the connection.
+TEST(AccessControlE2E, EachCallsTokenDecidesOnASharedConnection) {
+  const std::string dir = testing::temp_dir("access-shared-connection");
+  Daemon daemon(dir + "/data", {"--token-file", token_file(dir)}, with_token(kAdminToken));
+  auto channel = grpc::CreateChannel(daemon.address(), grpc::experimental::LocalCredentials(LOCAL_TCP));
+  auto stub = pb::Gatekeeper::NewStub(channel);
+  auto create_as = [&](const char* token) {
+    grpc::ClientContext ctx;
+    ctx.set_credentials(grpc::AccessTokenCredentials(token));
+    pb::CreateSceneRequest request;
+    request.set_name("shared");
+    pb::SceneInfo out;
+    return stub->CreateScene(&ctx, request, &out);
+  };
+  for (int round = 0; round < 2; ++round) {
+    EXPECT_TRUE(create_as(kWriteToken).ok());
+    EXPECT_EQ(create_as(kReadToken).error_code(), grpc::StatusCode::PERMISSION_DENIED);  // not escalated by the writer before
+    EXPECT_TRUE(create_as(kAdminToken).ok());                                            // not held back by the reader before
+  }
+}
+
 TEST(AccessControlE2E, ATokenFileOthersCanReadIsRefused) {
   const std::string dir = testing::temp_dir("access-token-mode");
   std::string log;
@@ -199,18 +221,21 @@ TEST(AccessControlE2E, TlsAndMutualTlsWithRealCertificates) {
   grpc::ChannelArguments args;
   args.SetSslTargetNameOverride("localhost");
   {
-    // TLS: any address may be served; a client that does not trust the CA cannot connect,
-    // and a plain client is not served.
-    Daemon daemon(dir + "/tls", {"--listen", "0.0.0.0:0", "--tls-cert", c.server_cert, "--tls-key", c.server_key},
-                  tls(c, false), args);
+    // TLS alone on loopback; a client that does not trust the CA cannot connect, and a plain
+    // client is not served. Beyond loopback TLS alone is refused (anybody could call).
+    std::string log;
+    EXPECT_EQ(refused_start(dir, "--listen 0.0.0.0:0 --tls-cert " + c.server_cert + " --tls-key " + c.server_key, &log), 2) << log;
+    EXPECT_NE(log.find("--tls-client-ca"), std::string::npos) << log;
+    Daemon daemon(dir + "/tls", {"--tls-cert", c.server_cert, "--tls-key", c.server_key}, tls(c, false), args);
     EXPECT_TRUE(server_info(daemon.channel()).ok());
     EXPECT_FALSE(info_over(daemon.address(), tls(c, false, true)).ok());
     EXPECT_FALSE(server_info(grpc::CreateChannel(daemon.address(), grpc::InsecureChannelCredentials())).ok());
   }
   {
-    // Mutual TLS: without a client certificate signed by the client CA there is no call.
+    // Mutual TLS on every address: without a client certificate signed by the client CA there is no call.
     Daemon daemon(dir + "/mtls",
-                  {"--tls-cert", c.server_cert, "--tls-key", c.server_key, "--tls-client-ca", c.ca, "--token-file", token_file(dir)},
+                  {"--listen", "0.0.0.0:0", "--tls-cert", c.server_cert, "--tls-key", c.server_key, "--tls-client-ca", c.ca,
+                   "--token-file", token_file(dir)},
                   grpc::CompositeChannelCredentials(tls(c, true), grpc::AccessTokenCredentials(kAdminToken)), args);
     EXPECT_TRUE(server_info(daemon.channel()).ok());
     EXPECT_FALSE(info_over(daemon.address(), grpc::CompositeChannelCredentials(tls(c, false), grpc::AccessTokenCredentials(kAdminToken))).ok());
@@ -226,8 +251,10 @@ TEST(AccessControlE2E, TlsAndMutualTlsWithRealCertificates) {
 TEST(AccessControlE2E, TheDataDirectoryAndItsFilesArePrivate) {
   const std::string dir = testing::temp_dir("access-private");
   const std::string data = dir + "/data";
-  std::filesystem::create_directories(data);
-  ::chmod(data.c_str(), 0755);  // an existing, open directory is closed too
+  std::filesystem::create_directories(data + "/left-behind");
+  write_file(data + "/left-behind/notes.txt", "an earlier run's file\n", 0666);
+  ::chmod((data + "/left-behind").c_str(), 0755);
+  ::chmod(data.c_str(), 0755);  // an existing, open directory and what it holds are closed too
   Daemon daemon(data, {});
   auto stub = daemon.stub();
   pb::PartInfo info;
