@@ -2,13 +2,17 @@
 
 #include <grpcpp/security/auth_metadata_processor.h>
 #include <grpcpp/security/server_credentials.h>
+#include <openssl/bio.h>
 #include <openssl/crypto.h>
+#include <openssl/pem.h>
+#include <openssl/x509.h>
 #include <openssl/sha.h>
 #include <spdlog/spdlog.h>
 #include <sys/stat.h>
 
 #include <array>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <vector>
 
@@ -37,6 +41,27 @@ Result<std::string> read_private_file(const std::string& path, const std::string
   bytes << in.rdbuf();
   if (!in && !in.eof()) return invalid_argument(option, "cannot read " + path);
   return bytes.str();
+}
+
+// When the first certificate of a PEM chain is past its notAfter: that date; else nothing.
+std::optional<std::string> certificate_expired(const std::string& pem) {
+  BIO* bio = BIO_new_mem_buf(pem.data(), static_cast<int>(pem.size()));
+  if (!bio) return std::nullopt;
+  X509* cert = PEM_read_bio_X509(bio, nullptr, nullptr, nullptr);
+  BIO_free(bio);
+  if (!cert) return std::nullopt;  // gRPC reports an unreadable certificate itself
+  std::optional<std::string> out;
+  const ASN1_TIME* not_after = X509_get0_notAfter(cert);
+  if (X509_cmp_current_time(not_after) < 0) {
+    BIO* text = BIO_new(BIO_s_mem());
+    ASN1_TIME_print(text, not_after);
+    char* data = nullptr;
+    const long size = BIO_get_mem_data(text, &data);
+    out = std::string(data, static_cast<std::size_t>(size));
+    BIO_free(text);
+  }
+  X509_free(cert);
+  return out;
 }
 
 struct TokenEntry {
@@ -144,6 +169,8 @@ Result<std::shared_ptr<grpc::ServerCredentials>> server_credentials(const Access
       return invalid_argument(options.tls_cert_file.empty() ? "tls_cert" : "tls_key", "TLS needs both a certificate and its key");
     auto cert = read_private_file(options.tls_cert_file, "tls_cert", false);
     if (!cert.ok()) return cert.error();
+    if (auto expired = certificate_expired(cert.value()); expired)
+      return invalid_argument("tls_cert", options.tls_cert_file + " has expired (" + *expired + "): clients would refuse it");
     auto key = read_private_file(options.tls_key_file, "tls_key", true);
     if (!key.ok()) return key.error();
     grpc::SslServerCredentialsOptions ssl;

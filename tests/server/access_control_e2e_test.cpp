@@ -188,6 +188,11 @@ Certificates make_certificates(const std::string& dir) {
       "openssl x509 -req -in server.csr -CA ca.pem -CAkey ca.key -CAcreateserial -out server.pem -days 2 -extfile server.ext\n"
       "openssl req -newkey rsa:2048 -nodes -keyout client.key -out client.csr -subj /CN=planner\n"
       "openssl x509 -req -in client.csr -CA ca.pem -CAkey ca.key -CAcreateserial -out client.pem -days 2\n"
+      "mkdir -p cadb; : > cadb/index.txt; echo 01 > cadb/serial\n"
+      "printf '[ca]\\ndefault_ca=d\\n[d]\\ndir=./cadb\\ndatabase=$dir/index.txt\\nserial=$dir/serial\\nnew_certs_dir=$dir\\n"
+      "certificate=./ca.pem\\nprivate_key=./ca.key\\ndefault_md=sha256\\npolicy=p\\n[p]\\ncommonName=supplied\\n' > ca.cnf\n"
+      "openssl ca -batch -config ca.cnf -in server.csr -out server-expired.pem -startdate 20200101000000Z "
+      "-enddate 20200102000000Z -extfile server.ext\n"
       "chmod 600 server.key client.key\n";
   write_file(dir + "/make-certificates.sh", script, 0700);
   EXPECT_EQ(std::system(("bash " + dir + "/make-certificates.sh").c_str()), 0) << "openssl failed; see " << dir << "/openssl.log";
@@ -242,9 +247,13 @@ TEST(AccessControlE2E, TlsAndMutualTlsWithRealCertificates) {
     // A certificate but no token: the token still decides.
     EXPECT_EQ(info_over(daemon.address(), tls(c, true)).error_code(), grpc::StatusCode::UNAUTHENTICATED);
   }
+  // An expired server certificate is refused at startup (clients would refuse it later).
+  std::string log;
+  EXPECT_EQ(refused_start(dir, "--listen 127.0.0.1:0 --tls-cert " + dir + "/server-expired.pem --tls-key " + c.server_key, &log), 2)
+      << log;
+  EXPECT_NE(log.find("expired"), std::string::npos) << log;
   // A key file others can read is refused.
   ::chmod(c.server_key.c_str(), 0644);
-  std::string log;
   EXPECT_EQ(refused_start(dir, "--listen 127.0.0.1:0 --tls-cert " + c.server_cert + " --tls-key " + c.server_key, &log), 2) << log;
 }
 
