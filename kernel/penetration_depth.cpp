@@ -271,7 +271,7 @@ Result<DepthAlong> penetration_along(const MeshBvh& a, const RigidTransform& pos
 
 Result<DepthVector> penetration_vector(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
                                        const RigidTransform& pose_b, int samples, double tolerance_mm,
-                                       const StopToken& stop) {
+                                       const StopToken& stop, const StopToken& enough) {
   if (samples < 6 || samples > 100000) return invalid_argument("samples", "must be in [6, 100000]");
   DepthVector best;
   best.depth_mm = std::numeric_limits<double>::infinity();
@@ -304,7 +304,7 @@ Result<DepthVector> penetration_vector(const MeshBvh& a, const RigidTransform& p
     return best;
   }
   for (std::size_t i = 0; i < candidates.size(); ++i) {
-    if (stop.stop_requested()) {
+    if (stop.stop_requested() || (best.directions_tried > 0 && enough.stop_requested())) {
       // The best so far is still a certified upper bound (B moved by it is free), only less tight.
       if (best.directions_tried > 0 && std::isfinite(best.depth_mm)) {
         best.stopped_early = true;

@@ -49,10 +49,11 @@ struct DepthVector {
 };
 
 // The smallest depth over the convex pieces' axes and `samples` lattice directions.
-// Asks `stop` between directions: when it says so, the best found so far (stopped_early), or
-// kStopped if no direction was tried yet.
+// Asks `stop` as it goes (the caller gave up): the best found so far (stopped_early), or kStopped
+// if no direction was finished. Asks `enough` between directions (a time budget): once one
+// direction is finished, the best so far is returned (stopped_early).
 Result<DepthVector> penetration_vector(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
                                        const RigidTransform& pose_b, int samples = 162, double tolerance_mm = 1e-6,
-                                       const StopToken& stop = {});
+                                       const StopToken& stop = {}, const StopToken& enough = {});
 
 }  // namespace gk
