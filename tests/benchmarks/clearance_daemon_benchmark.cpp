@@ -10,6 +10,7 @@
 #include "kernel/mesh_distance.h"
 #include "mesh_io/mesh_file_reader.h"
 #include "tests/server/daemon_fixture.h"
+#include "tests/support/near_contact_poses.h"
 #include "tests/support/random_meshes.h"
 
 #include <Eigen/Geometry>
@@ -18,7 +19,6 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -65,25 +65,6 @@ std::string obj_text(const gk::TriangleMesh& m) {
     out += line;
   }
   return out;
-}
-
-std::vector<RigidTransform> near_contact_poses(const Part& a, const Part& b, unsigned seed, int count) {
-  gk::testing::Rng rng(seed);
-  std::uniform_real_distribution<double> gap(-1.0, 3.0);
-  std::vector<RigidTransform> poses;
-  const Vec3 ca = a.bvh->root_bounds().center();
-  const Vec3 cb = b.bvh->root_bounds().center();
-  const double reach = a.bvh->root_bounds().diagonal().norm() + b.bvh->root_bounds().diagonal().norm();
-  while (static_cast<int>(poses.size()) < count) {
-    RigidTransform pose = gk::testing::random_pose(rng, 0.0);
-    const Vec3 dir = Vec3::Random().normalized();
-    pose.translation = ca + dir * reach - pose.rotation * cb;
-    const auto d = gk::distance(*a.bvh, RigidTransform{}, *b.bvh, pose).value();
-    const Vec3 u = (d.point_b - d.point_a).normalized();
-    pose.translation -= (d.distance_mm - gap(rng)) * u;
-    poses.push_back(pose);
-  }
-  return poses;
 }
 
 void to_proto(const RigidTransform& t, pb::Pose* out) {
@@ -139,7 +120,7 @@ int main(int argc, char** argv) {
     const std::string id_b = gk::testing::upload_part_id(*stub, obj_text(b.mesh), "obj");
     if (id_a.empty() || id_b.empty()) return 2;
     std::vector<pb::ClearanceQueryRequest> requests;
-    for (const RigidTransform& pose : near_contact_poses(a, b, spec.seed, 100)) {
+    for (const RigidTransform& pose : gk::testing::near_contact_poses(*a.bvh, *b.bvh, spec.seed, 100)) {
       pb::ClearanceQueryRequest r;
       r.mutable_a()->set_part_id(id_a);
       r.mutable_b()->set_part_id(id_b);

@@ -9,6 +9,7 @@
 #include "kernel/mesh_distance.h"
 #include "mesh_io/mesh_file_reader.h"
 #include "tests/benchmarks/latency_counters.h"
+#include "tests/support/near_contact_poses.h"
 #include "tests/support/random_meshes.h"
 
 #include <benchmark/benchmark.h>
@@ -159,8 +160,7 @@ const LargePair kLargePairs[] = {
     {"meshes/cgal/fandisk_large.off", 100.0, "meshes/occt/TR12J_OCC64K.stl", 1.0},
 };
 
-// Poses of B near A: a random orientation and direction, then moved along the witness direction
-// so the gap is uniform in [-1, 3] mm (negative: interpenetrating). Prepared outside the timing.
+// Poses of B near A, gap uniform in [-1, 3] mm (tests/support), prepared outside the timing.
 const std::vector<RigidTransform>& near_contact_poses(int pair_index) {
   static std::map<int, std::vector<RigidTransform>> cache;
   auto it = cache.find(pair_index);
@@ -168,22 +168,8 @@ const std::vector<RigidTransform>& near_contact_poses(int pair_index) {
   const LargePair& p = kLargePairs[pair_index];
   const Subject& a = subject(p.a, p.scale_a);
   const Subject& b = subject(p.b, p.scale_b);
-  gk::testing::Rng rng(static_cast<unsigned>(1000 + pair_index));
-  std::uniform_real_distribution<double> gap(-1.0, 3.0);
-  std::vector<RigidTransform> poses;
-  const Vec3 ca = a.ours->root_bounds().center();
-  const Vec3 cb = b.ours->root_bounds().center();
-  const double reach = a.ours->root_bounds().diagonal().norm() + b.ours->root_bounds().diagonal().norm();
-  while (poses.size() < 100) {
-    RigidTransform pose = gk::testing::random_pose(rng, 0.0);
-    const Vec3 dir = Vec3::Random().normalized();
-    pose.translation = ca + dir * reach - pose.rotation * cb;
-    const auto d = gk::distance(*a.ours, RigidTransform{}, *b.ours, pose).value();
-    const Vec3 u = (d.point_b - d.point_a).normalized();
-    pose.translation -= (d.distance_mm - gap(rng)) * u;
-    poses.push_back(pose);
-  }
-  return cache.emplace(pair_index, poses).first->second;
+  return cache.emplace(pair_index, gk::testing::near_contact_poses(*a.ours, *b.ours, static_cast<unsigned>(1000 + pair_index), 100))
+      .first->second;
 }
 
 void large(benchmark::State& state, Query query) {
