@@ -105,6 +105,15 @@ std::vector<TopoDS_Shape> solids_of(const TopoDS_Shape& shape) {
 // overlapping solids is not (one common of the whole compounds called a shared 8000 mm^3 a touch).
 // Solids of one assembly that overlap each other are counted once per pair. False when a Boolean
 // failed.
+// The nearest point of a shape to a point (a vertex against the shape: point-surface extrema,
+// reliable for a point this close to the surface).
+bool nearest_point_on(const TopoDS_Shape& shape, const gp_Pnt& p, gp_Pnt& q) {
+  BRepExtrema_DistShapeShape dist(BRepBuilderAPI_MakeVertex(p).Vertex(), shape);
+  if (!dist.IsDone() || dist.NbSolution() < 1) return false;
+  q = dist.PointOnShape2(1);
+  return true;
+}
+
 // Where the two boundaries cross, the section curve rings the region each solid pushes into the
 // other; the deepest point of that region lies under the ring's middle. The middle of each ring
 // (and of the whole section) is projected onto both surfaces, and a projection the classifier puts
@@ -138,9 +147,8 @@ bool surface_point_inside_where_crossing(const TopoDS_Shape& a, const TopoDS_Sha
     for (int side = 0; side < 2; ++side) {
       const TopoDS_Shape& on = side == 0 ? a : b;
       const TopoDS_Shape& into = side == 0 ? b : a;
-      BRepExtrema_DistShapeShape nearest(BRepBuilderAPI_MakeVertex(gp_Pnt(m)).Vertex(), on);
-      if (!nearest.IsDone() || nearest.NbSolution() < 1) continue;
-      const gp_Pnt q = nearest.PointOnShape2(1);
+      gp_Pnt q;
+      if (!nearest_point_on(on, gp_Pnt(m), q)) continue;
       // Half the tolerance: the overlap's depth is shared between the two caps, so one of them
       // reaches at least half of it into the other solid.
       if (inside_a_solid(into, q, 0.25 * tolerances::kContactMm)) {
@@ -281,24 +289,16 @@ Result<ProjectedPair> closest_by_projection(const Shape& a, const RigidTransform
   ProjectedPair out;
   std::string failure;
   auto ran = guarded("shapes", "projecting witnesses", [&] {
-    // The nearest point of a shape to a point (a vertex against the shape: point-surface extrema,
-    // reliable for a point this close to the surface).
-    auto nearest = [&](const TopoDS_Shape& shape, const gp_Pnt& p, gp_Pnt& q) {
-      BRepExtrema_DistShapeShape dist(BRepBuilderAPI_MakeVertex(p).Vertex(), shape);
-      if (!dist.IsDone() || dist.NbSolution() < 1) return false;
-      q = dist.PointOnShape2(1);
-      return true;
-    };
     const Vec3 la = start_a - frame_origin, lb = start_b - frame_origin;
     gp_Pnt qa, qb;
-    if (!nearest(placed_a, gp_Pnt(la.x(), la.y(), la.z()), qa) ||
-        !nearest(placed_b, gp_Pnt(lb.x(), lb.y(), lb.z()), qb))
+    if (!nearest_point_on(placed_a, gp_Pnt(la.x(), la.y(), la.z()), qa) ||
+        !nearest_point_on(placed_b, gp_Pnt(lb.x(), lb.y(), lb.z()), qb))
       return void(failure = "a witness could not be projected");
     double best = qa.Distance(qb);
     out = {best, vec(qa) + frame_origin, vec(qb) + frame_origin};
     for (int i = 0; i < iterations; ++i) {
       gp_Pnt nb, na;
-      if (!nearest(placed_b, qa, nb) || !nearest(placed_a, nb, na)) break;
+      if (!nearest_point_on(placed_b, qa, nb) || !nearest_point_on(placed_a, nb, na)) break;
       qa = na;
       qb = nb;
       const double d = qa.Distance(qb);
