@@ -24,7 +24,10 @@ ConvexPolytope ConvexPolytope::prism(const std::vector<Vec2>& profile, double x_
 
 ConvexPolytope ConvexPolytope::plate(const Plate& plate) {
   ConvexPolytope p;
-  for (const Vec3& c : plate.corners()) p.vertices.push_back(c);
+  const auto corners = plate.corners();
+  p.vertices.assign(corners.begin(), corners.end());
+  p.face_normals.reserve(3);
+  p.edge_directions.reserve(3);
   for (const Vec3& e : plate.edge) {
     if (!(e.norm() > 0.0)) continue;
     p.face_normals.push_back(e.normalized());
@@ -36,6 +39,8 @@ ConvexPolytope ConvexPolytope::plate(const Plate& plate) {
 ConvexPolytope ConvexPolytope::transformed(const RigidTransform& pose) const {
   ConvexPolytope p;
   p.vertices.reserve(vertices.size());
+  p.face_normals.reserve(face_normals.size());
+  p.edge_directions.reserve(edge_directions.size());
   for (const Vec3& v : vertices) p.vertices.push_back(pose.apply(v));
   for (const Vec3& n : face_normals) p.face_normals.push_back(pose.apply_direction(n));
   for (const Vec3& e : edge_directions) p.edge_directions.push_back(pose.apply_direction(e));
@@ -61,17 +66,23 @@ double overlap_along(const ConvexPolytope& a, const ConvexPolytope& b, const Vec
   return std::min(a_hi - b_lo, b_hi - a_lo);
 }
 
-// The smallest overlap over every candidate axis (negative: the largest gap found).
-double smallest_overlap(const ConvexPolytope& a, const ConvexPolytope& b) {
+// The smallest overlap over every candidate axis (negative: the largest gap found), or the first
+// one at or below `enough` (a caller that only needs to know that much stops there).
+double smallest_overlap(const ConvexPolytope& a, const ConvexPolytope& b, double enough) {
   double smallest = std::numeric_limits<double>::infinity();
-  auto try_axis = [&](const Vec3& axis) { smallest = std::min(smallest, overlap_along(a, b, axis)); };
-  for (const Vec3& n : a.face_normals) try_axis(n);
-  for (const Vec3& n : b.face_normals) try_axis(n);
+  auto try_axis = [&](const Vec3& axis) {
+    smallest = std::min(smallest, overlap_along(a, b, axis));
+    return smallest <= enough;
+  };
+  for (const Vec3& n : a.face_normals)
+    if (try_axis(n)) return smallest;
+  for (const Vec3& n : b.face_normals)
+    if (try_axis(n)) return smallest;
   for (const Vec3& ea : a.edge_directions)
     for (const Vec3& eb : b.edge_directions) {
       const Vec3 c = ea.cross(eb);
       const double len = c.norm();
-      if (len > 1e-9) try_axis(c / len);
+      if (len > 1e-9 && try_axis(c / len)) return smallest;
     }
   return smallest;
 }
@@ -79,11 +90,12 @@ double smallest_overlap(const ConvexPolytope& a, const ConvexPolytope& b) {
 }  // namespace
 
 double penetration_depth(const ConvexPolytope& a, const ConvexPolytope& b) {
-  return std::max(0.0, smallest_overlap(a, b));
+  // Any axis without overlap proves depth 0: no need to look at the others.
+  return std::max(0.0, smallest_overlap(a, b, 0.0));
 }
 
 double separation_lower_bound(const ConvexPolytope& a, const ConvexPolytope& b) {
-  return std::max(0.0, -smallest_overlap(a, b));
+  return std::max(0.0, -smallest_overlap(a, b, -std::numeric_limits<double>::infinity()));
 }
 
 }  // namespace gk::p4

@@ -52,7 +52,7 @@ Result<StepAnswer> StepValidator::validate_in_search(const SheetPart& part, cons
     refused.reason = "the correction search's budget of validations is spent";
     return refused;
   }
-  auto a = validate(part, step, false);
+  auto a = answer_step(part, step, false, Figures::kVerdictOnly);
   if (a.ok() && a.value().decided_by != Stage::kCache) --search_validations_left_;
   return a;
 }
@@ -183,17 +183,18 @@ void StepValidator::add_correction(const SheetPart& part, const BendStep& step, 
   // (ABA open), the clamp and the step are validated at the new position.
   const auto [fx0, fx1] = feature_x_range(part, step, hit.point_at_start_mm);
   const double feature_centre = 0.5 * (fx0 + fx1), feature_width = fx1 - fx0;
+  const auto spans = model.slot_spans();
   std::vector<std::pair<double, double>> gaps;
-  for (std::size_t i = 0; i < model.aba.segment_widths_mm.size();) {
+  for (std::size_t i = 0; i < spans.size();) {
     const bool on = original.engaged_segments.empty() || original.engaged_segments[i];
     if (on) {
       ++i;
       continue;
     }
     std::size_t j = i;
-    while (j + 1 < model.aba.segment_widths_mm.size() && !(original.engaged_segments[j + 1])) ++j;
-    if (model.slot_x_max(j) - model.slot_x_min(i) >= feature_width + 2.0 * options_.required_clearance_mm)
-      gaps.emplace_back(model.slot_x_min(i), model.slot_x_max(j));
+    while (j + 1 < spans.size() && !(original.engaged_segments[j + 1])) ++j;
+    if (spans[j].second - spans[i].first >= feature_width + 2.0 * options_.required_clearance_mm)
+      gaps.emplace_back(spans[i].first, spans[j].second);
     i = j + 1;
   }
   std::sort(gaps.begin(), gaps.end(), [&](const auto& a, const auto& b) {
@@ -214,7 +215,7 @@ void StepValidator::add_correction(const SheetPart& part, const BendStep& step, 
         const auto [x0, x1] = feature_x_range(part, step, col.point_at_start_mm);
         const double margin = options_.required_clearance_mm + 1.0;
         for (std::size_t i = 0; i < engaged.size(); ++i)
-          if (engaged[i] && model.slot_x_max(i) > x0 - margin && model.slot_x_min(i) < x1 + margin) {
+          if (engaged[i] && spans[i].second > x0 - margin && spans[i].first < x1 + margin) {
             engaged[i] = false;
             changed = true;
           }

@@ -126,10 +126,10 @@ double clamped_area_mm2(const MachineModel& model, const MachineState& state, co
   if (!(y1 > y0)) return 0.0;  // a segment with no flat lower face presses on a line at most
   const std::vector<Polygon> faces = upper_faces(held, clamp_z + low, true);
   double total = 0.0;
-  for (std::size_t i = 0; i < model.aba.segment_widths_mm.size(); ++i) {
+  const auto spans = model.slot_spans();
+  for (std::size_t i = 0; i < spans.size(); ++i) {
     if (!state.engaged_segments.empty() && !state.engaged_segments[i]) continue;
-    for (const Polygon& face : faces)
-      total += overlap_with_rectangle(face, Vec2(model.slot_x_min(i), y0), Vec2(model.slot_x_max(i), y1));
+    for (const Polygon& face : faces) total += overlap_with_rectangle(face, Vec2(spans[i].first, y0), Vec2(spans[i].second, y1));
   }
   return total;
 }

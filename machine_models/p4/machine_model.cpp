@@ -67,6 +67,18 @@ double MachineModel::slot_x_min(std::size_t i) const {
 
 double MachineModel::slot_x_max(std::size_t i) const { return slot_x_min(i) + aba.segment_widths_mm[i]; }
 
+std::vector<std::pair<double, double>> MachineModel::slot_spans() const {
+  std::vector<std::pair<double, double>> spans;
+  spans.reserve(aba.segment_widths_mm.size());
+  if (aba.segment_widths_mm.empty()) return spans;
+  double x = slot_x_min(0);
+  for (double w : aba.segment_widths_mm) {
+    spans.emplace_back(x, x + w);
+    x += w + aba.gap_mm;
+  }
+  return spans;
+}
+
 Result<MachineModel> parse_machine_model(const std::string& toml_text) {
   toml::table root;
   try {

@@ -55,6 +55,8 @@ struct MachineModel {
   // X range [min, max] of ABA slot i.
   double slot_x_min(std::size_t i) const;
   double slot_x_max(std::size_t i) const;
+  // Every slot's X range, in one pass (the loops over all segments use this).
+  std::vector<std::pair<double, double>> slot_spans() const;
 };
 
 // Parses and validates a model; errors name the TOML key (e.g. "organ[3].profile_yz_mm").

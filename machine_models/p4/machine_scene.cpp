@@ -92,11 +92,12 @@ Result<std::shared_ptr<MachineScene>> MachineScene::build(const MachineModel& mo
 
 void MachineScene::place_organs() {
   std::size_t spec_index = 0;
+  const auto spans = model_.slot_spans();
   for (Organ& o : organs_) {
     Vec3 offset = Vec3::Zero();
     if (o.is_aba_segment) {
       o.engaged = state_.engaged_segments.empty() || state_.engaged_segments[o.slot];
-      offset = Vec3(model_.slot_x_min(o.slot), 0.0, state_.clamp_z_mm + (o.engaged ? 0.0 : model_.aba.retract_z_mm));
+      offset = Vec3(spans[o.slot].first, 0.0, state_.clamp_z_mm + (o.engaged ? 0.0 : model_.aba.retract_z_mm));
     } else {
       const PrismOrganSpec& spec = model_.organs[spec_index++];
       if (spec.relative_to_clamp) offset.z() = state_.clamp_z_mm;

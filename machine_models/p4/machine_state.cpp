@@ -19,8 +19,9 @@ MachineState MachineState::with_aba_span(const MachineModel& model, double x_min
   MachineState s;
   s.clamp_z_mm = clamp_z_mm;
   s.engaged_segments.resize(model.aba.segment_widths_mm.size());
+  const auto spans = model.slot_spans();
   for (std::size_t i = 0; i < s.engaged_segments.size(); ++i)
-    s.engaged_segments[i] = model.slot_x_min(i) >= x_min - 1e-9 && model.slot_x_max(i) <= x_max + 1e-9;
+    s.engaged_segments[i] = spans[i].first >= x_min - 1e-9 && spans[i].second <= x_max + 1e-9;
   return s;
 }
 

@@ -43,6 +43,9 @@ struct SweepOrgan {
   int index = 0;  // in MachineScene::organs()
   const MeshBvh* mesh = nullptr;
   RigidTransform pose;
+  // The organ's vertices as a convex polytope in machine coordinates, when known: separating axes
+  // against a plate body bound the distance from below before a mesh query is spent.
+  const ConvexPolytope* shape = nullptr;
 };
 
 struct HullLodResult {

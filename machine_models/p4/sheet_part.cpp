@@ -132,6 +132,7 @@ Result<SheetPart> SheetPart::from_surface(TriangleMesh surface, double thickness
 std::vector<Vec3> SheetPart::extent_points() const {
   if (surface_) return surface_->vertices();
   std::vector<Vec3> out;
+  out.reserve(8 * plates_.size());
   for (const Plate& p : plates_)
     for (const Vec3& c : p.corners()) out.push_back(c);
   return out;
@@ -183,6 +184,8 @@ Result<bool> SheetPart::split_surface(const Vec2& point, const Vec2& direction, 
 TriangleMesh plates_mesh(const std::vector<Plate>& plates) {
   std::vector<Vec3> v;
   std::vector<TriangleMesh::Face> f;
+  v.reserve(8 * plates.size());
+  f.reserve(12 * plates.size());
   // Box faces for corner numbering k = a + 2b + 4c, wound outward for a right-handed edge triple.
   static const std::uint32_t kFaces[12][3] = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
                                               {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};

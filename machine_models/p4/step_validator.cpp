@@ -420,10 +420,15 @@ Result<StepAnswer> StepValidator::validate(const SheetPart& part, const BendStep
 }
 
 Result<StepAnswer> StepValidator::validate(const SheetPart& part, const BendStep& step, bool with_corrections) {
+  return answer_step(part, step, with_corrections, Figures::kReport);
+}
+
+Result<StepAnswer> StepValidator::answer_step(const SheetPart& part, const BendStep& step, bool with_corrections, Figures figures) {
   const auto t0 = Clock::now();
   auto valid = validate_step(scene_->model(), step);
   if (!valid.ok()) return valid.error();
-  const std::uint64_t key = mix(mix(mix(part.content_hash(), step.hash()), scene_->state().hash()), with_corrections ? 1 : 2);
+  const std::uint64_t kind = figures == Figures::kVerdictOnly ? 3 : with_corrections ? 1 : 2;
+  const std::uint64_t key = mix(mix(mix(part.content_hash(), step.hash()), scene_->state().hash()), kind);
   if (auto it = memo_.find(key); it != memo_.end()) {
     StepAnswer hit = it->second;
     hit.decided_by = Stage::kCache;
@@ -431,15 +436,15 @@ Result<StepAnswer> StepValidator::validate(const SheetPart& part, const BendStep
     hit.times.cache_us = hit.times.total_us = us_since(t0);
     return hit;
   }
-  auto answer = run_pipeline(part, step);
-  if (!answer.ok()) return answer;
-  StepAnswer& a = answer.value();
+  auto result = run_pipeline(part, step, figures);
+  if (!result.ok()) return result;
+  StepAnswer& a = result.value();
   if (a.verdict == Verdict::kCollision && with_corrections) add_correction(part, step, a);
   a.times.cache_us = 0.0;
   a.times.total_us = us_since(t0);
   if (memo_.size() >= options_.memo_capacity) memo_.clear();
   memo_[key] = a;
-  return answer;
+  return result;
 }
 
 namespace {
@@ -614,7 +619,8 @@ bool starts_inside(const StepBody& body, const MovingBody& version, const Obstac
 
 }  // namespace
 
-Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const BendStep& step) {
+Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const BendStep& step, Figures figures) {
+  const bool report = figures == Figures::kReport;
   StepAnswer answer;
   auto t = Clock::now();
   auto prepared_or = prepare(part, step);
@@ -689,7 +695,7 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
     if (part_body && manipulator && part_body->above_sheet &&
         manipulator->whole.mesh->root_bounds().expanded(window).overlaps(part_body->above_sheet->mesh->root_bounds())) {
       DistanceRequest req;
-      req.upper_bound_mm = window;
+      req.upper_bound_mm = report ? window : contact;
       auto d = distance(*manipulator->whole.mesh, RigidTransform{}, *part_body->above_sheet->mesh, RigidTransform{}, req);
       if (!d.ok()) return d.error();
       double depth = 0.0;
@@ -758,7 +764,7 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
       double depth = 0.0;
       const bool inside = starts_inside(body, *version, ob, depth);
       DistanceRequest req;
-      req.upper_bound_mm = window;
+      req.upper_bound_mm = report ? window : contact;
       auto d = distance(*version->mesh, RigidTransform{}, *ob.mesh, ob.pose, req);
       if (!d.ok()) return d.error();
       if (inside || (d.value().found && d.value().distance_mm <= contact)) {
@@ -917,7 +923,7 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
       part_of_manipulator = plate_of(p.body->whole, k);
       deepest = &part_of_manipulator;
     }
-    col.depth_mm = deepest_over_motion(*deepest, prep.motion, s, p.obstacle->shape);
+    col.depth_mm = report ? deepest_over_motion(*deepest, prep.motion, s, p.obstacle->shape) : 0.0;
     answer.collisions.push_back(col);
     answer.verdict = Verdict::kCollision;
     answer.decided_by = Stage::kNarrow;
@@ -944,7 +950,7 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
     std::vector<std::size_t> which;
     for (std::size_t j = i; j < pairs.size(); ++j)
       if (pairs[j].version == pairs[i].version) {
-        organs_of.push_back({static_cast<int>(j), pairs[j].obstacle->mesh, pairs[j].obstacle->pose});
+        organs_of.push_back({static_cast<int>(j), pairs[j].obstacle->mesh, pairs[j].obstacle->pose, &pairs[j].obstacle->shape});
         which.push_back(j);
         hulled[j] = 1;
       }
@@ -979,7 +985,7 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
   for (std::size_t i = 0; i < pairs.size(); ++i) {
     if (!narrow[i]) continue;
     const bool whole = pairs[i].version == &pairs[i].body->whole;
-    const SweepOrgan organ{static_cast<int>(i), pairs[i].obstacle->mesh, pairs[i].obstacle->pose};
+    const SweepOrgan organ{static_cast<int>(i), pairs[i].obstacle->mesh, pairs[i].obstacle->pose, &pairs[i].obstacle->shape};
     if (whole) {
       for (const MovingBody& piece : pairs[i].body->pieces) {
         sweep_pairs.push_back({&piece, organ});
@@ -1042,7 +1048,7 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
     pair_group[i] = group_of(pairs[i]);
     Group& g = groups[pair_group[i]];
     g.obstacles.push_back(pairs[i].obstacle);
-    g.organs.push_back({-1, pairs[i].obstacle->mesh, pairs[i].obstacle->pose});
+    g.organs.push_back({-1, pairs[i].obstacle->mesh, pairs[i].obstacle->pose, &pairs[i].obstacle->shape});
     g.shapes.push_back(pairs[i].obstacle->shape);
   }
   struct Target {  // a moving body (a version or one of its pieces) and its group's lower bound
@@ -1068,7 +1074,7 @@ Result<StepAnswer> StepValidator::run_pipeline(const SheetPart& part, const Bend
   for (Target& x : targets) {
     const double best = std::min(answer.min_clearance_mm, window);
     const double tolerance = std::max(tolerances::kClearanceBracketMm, tolerances::kClearanceBracketRelative * best);
-    if (budget <= 0 || x.lower >= best - tolerance) continue;
+    if (!report || budget <= 0 || x.lower >= best - tolerance) continue;
     const Group& g = groups[x.group];
     auto bracket = clearance_bracket(*x.body, prep.motion, g.organs, window, tolerances::kClearanceBracketMm,
                                      tolerances::kClearanceBracketRelative, budget, answer.min_clearance_mm, &g.shapes);

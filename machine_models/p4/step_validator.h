@@ -126,13 +126,19 @@ class StepValidator {
 
  private:
   struct Prepared;
-  Result<StepAnswer> run_pipeline(const SheetPart& part, const BendStep& step);
+  // What an answer carries besides its verdict: the figures a caller reads (the clearance bracket
+  // over the motion, the depth of a collision), or none, for the correction search, which only
+  // needs to know whether a candidate step is CLEAR and what it hits.
+  enum class Figures { kReport, kVerdictOnly };
+  Result<StepAnswer> answer_step(const SheetPart& part, const BendStep& step, bool with_corrections, Figures figures);
+  Result<StepAnswer> run_pipeline(const SheetPart& part, const BendStep& step, Figures figures);
   Result<std::shared_ptr<const Prepared>> prepare(const SheetPart& part, const BendStep& step);
   void add_correction(const SheetPart& part, const BendStep& step, StepAnswer& answer);
   // Validates the steps in order, each in its state; true when every one is CLEAR. Restores the
   // scene's state.
   bool validate_sequence(const SheetPart& part, const std::vector<CorrectionStep>& steps);
-  // validate() without corrections, within the correction search's budget (INCONCLUSIVE past it).
+  // validate() without corrections or figures, within the correction search's budget
+  // (INCONCLUSIVE past it).
   Result<StepAnswer> validate_in_search(const SheetPart& part, const BendStep& step);
   int search_validations_left_ = 0;
 
