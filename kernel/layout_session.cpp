@@ -9,11 +9,9 @@ namespace gk {
 namespace {
 
 // A frame reports where two objects touch, not every crossing triangle pair: the first few
-// contacts locate it (collecting thousands would cost a deep overlap milliseconds). Only when
-// none of them crosses is the pair looked at again with all its contacts, to tell a touch from a
-// collision.
+// contacts locate it (collecting thousands would cost a deep overlap milliseconds). The verdict
+// itself is decided over every pair whatever the cap (assess's contract).
 constexpr std::size_t kFirstContacts = 32;
-constexpr std::size_t kAllContacts = 10000;
 
 OrientedBox obb_of(const MeshBvh& mesh) { return OrientedBox::fit(mesh.mesh().vertices()); }
 

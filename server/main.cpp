@@ -5,12 +5,15 @@
 //               [--tls-cert PEM --tls-key PEM [--tls-client-ca PEM]] [--token-file FILE]
 //
 // Without TLS it serves loopback addresses only (see server/access_control.h). Everything it
-// writes is private to its user: the data directory 0700, files 0600 (umask 077).
+// writes is private to its user: the data directory 0700, files 0600 (umask 077). CAD files are
+// first read in a child process, this program run as `gatekeeperd --check-cad ...`
+// (server/cad_sandbox.h): a reader that crashes on a malformed file takes only the child down.
 //
 // Starts with the embedded default P4 machine model; health (grpc.health.v1) and reflection
 // (v1alpha) are served; SIGTERM or SIGINT shut it down gracefully (health NOT_SERVING, in-flight
 // calls get --drain-seconds to finish, workers join, storage closes).
 #include "server/access_control.h"
+#include "server/cad_sandbox.h"
 #include "server/gatekeeper_service.h"
 
 #include <CLI/CLI.hpp>
@@ -39,6 +42,8 @@ struct Config {
   int max_uploads = 64;
   double upload_idle_seconds = 60.0;
   int drain_seconds = 5;
+  int cad_check_seconds = 120;
+  double cad_check_memory_gb = 8.0;
   gk::server::AccessOptions access;
 };
 
@@ -66,6 +71,7 @@ bool apply_config_file(const std::string& path, Config& c, const CLI::App& app) 
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc > 1 && std::string(argv[1]) == "--check-cad") return gk::server::run_cad_check(argc, argv);
   Config config;
   std::string config_file;
   CLI::App app{"gatekeeperd: decides, before a machine moves, whether the move is physically possible"};
@@ -88,8 +94,26 @@ int main(int argc, char** argv) {
   app.add_option("--tls-client-ca", config.access.tls_client_ca, "PEM CA: require client certificates it signed (mutual TLS)");
   app.add_option("--token-file", config.access.token_file,
                  "lines \"<read|write|admin> <token>\" (mode 0600): every call needs \"authorization: Bearer <token>\"");
+  app.add_option("--cad-check-seconds", config.cad_check_seconds, "longest a CAD file may take to read and tessellate")
+      ->check(CLI::Range(1, 86400));
+  app.add_option("--cad-check-memory-gb", config.cad_check_memory_gb, "most memory reading one CAD file may take")
+      ->check(CLI::Range(0.5, 1024.0));
   CLI11_PARSE(app, argc, argv);
   if (!config_file.empty() && !apply_config_file(config_file, config, app)) return 2;
+  {
+    // The CAD readers run first in a child: this very program, found by its own path.
+    std::error_code ec;
+    const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
+    if (ec) {
+      spdlog::error("cannot find this program's path (/proc/self/exe) to read CAD files in a child: {}", ec.message());
+      return 1;
+    }
+    gk::server::CadSandbox sandbox;
+    sandbox.executable = self.string();
+    sandbox.timeout = std::chrono::seconds(config.cad_check_seconds);
+    sandbox.memory_bytes = static_cast<std::uint64_t>(config.cad_check_memory_gb * 1073741824.0);
+    gk::server::set_cad_sandbox(sandbox);
+  }
   spdlog::set_level(spdlog::level::from_str(config.log_level));
 
   // Block the shutdown signals in every thread; the main thread waits for them below.

@@ -5,6 +5,7 @@
 #include "mesh_io/mesh_file_reader.h"
 #include "occt_adapters/shape_import.h"
 #include "occt_adapters/shape_mesher.h"
+#include "server/cad_sandbox.h"
 
 #include <filesystem>
 
@@ -38,6 +39,14 @@ class NamedByFormat {
 
 Result<TriangleMesh> PartRegistry::read_any(const std::string& path, const std::string& format, double deflection_mm,
                                             occt::Shape* shape_out, std::vector<int>* face_of_triangle, double* used_deflection_mm) {
+  if (is_cad_format(format))
+    if (auto checked = check_cad_in_child(path, format, deflection_mm); !checked.ok()) return checked.error();
+  return read_in_process(path, format, deflection_mm, shape_out, face_of_triangle, used_deflection_mm);
+}
+
+Result<TriangleMesh> PartRegistry::read_in_process(const std::string& path, const std::string& format, double deflection_mm,
+                                                   occt::Shape* shape_out, std::vector<int>* face_of_triangle,
+                                                   double* used_deflection_mm) {
   const NamedByFormat named(path, format);
   if (is_cad_format(format)) {
     auto shape = occt::read_shape_file(named.path());

@@ -181,7 +181,9 @@ void StepValidator::add_correction(const SheetPart& part, const BendStep& step, 
   // disengaged segments: the design's shift is (gap centre - feature centre); the clearing shift
   // nearest to it is returned with the interval of clearing shifts around it. The lateral move
   // (ABA open), the clamp and the step are validated at the new position.
-  const auto [fx0, fx1] = feature_x_range(part, step, hit.point_at_start_mm);
+  // (plain variables, not a structured binding: C++17 lambdas cannot capture those)
+  const std::pair<double, double> feature = feature_x_range(part, step, hit.point_at_start_mm);
+  const double fx0 = feature.first, fx1 = feature.second;
   const double feature_centre = 0.5 * (fx0 + fx1), feature_width = fx1 - fx0;
   const auto spans = model.slot_spans();
   std::vector<std::pair<double, double>> gaps;

@@ -77,6 +77,40 @@ TEST(HostileClientE2E, ATinyTileIsRefusedNotACrash) {
   }
 }
 
+// A 341-byte STEP file, found by tests/fuzz/shape_file_fuzzer, on which OCCT's STEP translator
+// dereferences a null pointer (StepGeom_CartesianPoint::NbCoordinates): uploaded, it killed the
+// daemon. CAD files are now read in a child process first.
+const char* const kStepThatCrashesOcct = R"step(ISO-13-21;
+HEADER;'')ENDSEC;
+DATA;
+
+#6 = SHAPE_DEFINITION_REPRESENTATION(#7,#11);
+#7 = PRODUCT_DEFINITION_SHAPE('void','void',#8)
+#8 = PRODUCT_DEFINITION('von');
+#11 = ADVANCED_BREP_SHAPE_REPRESENTATION('',(#12),CARTE);
+#12 =ADVANCED_FACE('',(#15),#49.);2;
+#49 = PLANE('',#50);
+#50 = AXIS2_PLACEMENT_3D(lue','usi');
+ENDSEC;
+END-ISO-10303-1;
+)step";
+
+TEST(HostileClientE2E, ACadFileThatCrashesOcctsReaderIsRefusedAndTheDaemonServesOn) {
+  Daemon daemon(testing::temp_dir("hostile-cad-crash"));
+  auto stub = daemon.stub();
+  for (int round = 0; round < 3; ++round) {
+    pb::PartInfo info;
+    const grpc::Status s = testing::upload_part(*stub, kStepThatCrashesOcct, "step", &info);
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << s.error_message();
+    EXPECT_NE(s.error_message().find("crashed"), std::string::npos) << s.error_message();
+    expect_alive(*stub);
+  }
+  // A sound CAD file still goes through the child and is stored.
+  const std::string screw = testing::upload_part_id(*stub, testing::read_file(testing::shared_data("step/occt/screw.step")), "step");
+  EXPECT_FALSE(screw.empty());
+  expect_alive(*stub);
+}
+
 TEST(HostileClientE2E, ThreeHundredWatchersOfARunningAuditNeitherKillItNorGoUnanswered) {
   Daemon daemon(testing::temp_dir("hostile-watch"));
   auto stub = daemon.stub();
