@@ -51,37 +51,40 @@ Result<bool> AuditArchive::save(const std::string& job_id, const AuditJob& job, 
   return true;
 }
 
-std::vector<std::pair<std::string, std::shared_ptr<AuditJob>>> AuditArchive::load_all(std::size_t* unreadable) const {
-  std::vector<std::pair<std::string, std::shared_ptr<AuditJob>>> out;
-  std::size_t bad = 0;
+namespace {
+
+// A stored row back into an ended job; null when it cannot be read.
+std::shared_ptr<AuditJob> decode(const void* blob, int size) {
+  ::gatekeeper::server::ArchivedAudit archived;
+  if (!blob || !archived.ParseFromArray(blob, size)) return nullptr;
+  auto scene = scene_from_proto(archived.scene());
+  if (!scene.ok()) return nullptr;
+  std::vector<AuditedObject> objects;
+  for (const auto& o : archived.objects()) {
+    const Vec3 lo(o.box_min().x_mm(), o.box_min().y_mm(), o.box_min().z_mm());
+    const Vec3 hi(o.box_max().x_mm(), o.box_max().y_mm(), o.box_max().z_mm());
+    objects.push_back({o.id(), o.name(), o.category(), Aabb{lo, hi}});
+  }
+  return AuditJob::restored(std::move(scene).value(), snapshot_from_report(archived.report()), std::move(objects),
+                            {archived.answer_options().begin(), archived.answer_options().end()});
+}
+
+}  // namespace
+
+Result<std::shared_ptr<AuditJob>> AuditArchive::load(const std::string& job_id) const {
   sqlite3_stmt* stmt = nullptr;
-  sqlite3_prepare_v2(db_, "SELECT id, data FROM audits ORDER BY id", -1, &stmt, nullptr);
-  while (sqlite3_step(stmt) == SQLITE_ROW) {
-    const std::string id = reinterpret_cast<const char*>(sqlite3_column_text(stmt, 0));
-    ::gatekeeper::server::ArchivedAudit archived;
-    const void* blob = sqlite3_column_blob(stmt, 1);
-    const int size = sqlite3_column_bytes(stmt, 1);
-    if (!blob || !archived.ParseFromArray(blob, size)) {
-      ++bad;
-      continue;
-    }
-    auto scene = scene_from_proto(archived.scene());
-    if (!scene.ok()) {
-      ++bad;
-      continue;
-    }
-    std::vector<AuditedObject> objects;
-    for (const auto& o : archived.objects()) {
-      const Vec3 lo(o.box_min().x_mm(), o.box_min().y_mm(), o.box_min().z_mm());
-      const Vec3 hi(o.box_max().x_mm(), o.box_max().y_mm(), o.box_max().z_mm());
-      objects.push_back({o.id(), o.name(), o.category(), Aabb{lo, hi}});
-    }
-    out.emplace_back(id, AuditJob::restored(std::move(scene).value(), snapshot_from_report(archived.report()), std::move(objects),
-                                            {archived.answer_options().begin(), archived.answer_options().end()}));
+  sqlite3_prepare_v2(db_, "SELECT data FROM audits WHERE id = ?", -1, &stmt, nullptr);
+  sqlite3_bind_text(stmt, 1, job_id.c_str(), -1, SQLITE_TRANSIENT);
+  std::shared_ptr<AuditJob> job;
+  bool found = false;
+  if (sqlite3_step(stmt) == SQLITE_ROW) {
+    found = true;
+    job = decode(sqlite3_column_blob(stmt, 0), sqlite3_column_bytes(stmt, 0));
   }
   sqlite3_finalize(stmt);
-  if (unreadable) *unreadable = bad;
-  return out;
+  if (!found) return Error{ErrorCode::kNotFound, "job_id", "no audit job '" + job_id + "'"};
+  if (!job) return Error{ErrorCode::kInternal, "job_id", "the archived audit '" + job_id + "' cannot be read"};
+  return job;
 }
 
 }  // namespace gk::server

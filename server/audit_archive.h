@@ -21,8 +21,9 @@ class AuditArchive {
 
   // Stores the job with its final state.
   Result<bool> save(const std::string& job_id, const AuditJob& job, const AuditSnapshot& final_state);
-  // Every stored job, ended, in id order; entries that cannot be read are skipped and counted.
-  std::vector<std::pair<std::string, std::shared_ptr<AuditJob>>> load_all(std::size_t* unreadable = nullptr) const;
+  // One stored job, ended (NOT_FOUND when there is none). The daemon reads them on demand: ended
+  // jobs beyond a few are not kept in memory (AuditJobs).
+  Result<std::shared_ptr<AuditJob>> load(const std::string& job_id) const;
 
  private:
   AuditArchive() = default;

@@ -132,15 +132,11 @@ class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> 
 
 GatekeeperService::GatekeeperService(MachineRegistry& machines, PartRegistry& parts, SceneStore& scenes, AuditArchive* archive,
                                      ServiceOptions options)
-    : machines_(machines), parts_(parts), scenes_(scenes), archive_(archive), options_(options),
+    : machines_(machines), parts_(parts), scenes_(scenes), audits_(archive, options.ended_audits_in_memory), archive_(archive),
+      options_(options),
       pool_(options.workers, options.max_queued),
       audit_pool_(options.audit_jobs, options.audit_queue),
       upload_slots_(options.max_open_uploads, options.upload_idle_limit) {
-  if (archive_) {
-    std::size_t unreadable = 0;
-    for (auto& [id, job] : archive_->load_all(&unreadable)) audits_.restore(id, std::move(job));
-    if (unreadable > 0) spdlog::warn("{} archived audit jobs could not be read and were skipped", unreadable);
-  }
 }
 
 GatekeeperService::~GatekeeperService() { pool_.stop(); }
@@ -370,6 +366,11 @@ grpc::ServerUnaryReactor* GatekeeperService::GetServerInfo(grpc::CallbackServerC
       }
     }
     response->set_parts_stored(parts_.store().count());
+    const PartRegistry::MemoryStats memory = parts_.memory_stats();
+    response->set_parts_in_memory(memory.parts);
+    response->set_part_memory_bytes(memory.bytes);
+    response->set_parts_evicted(memory.evicted);
+    response->set_audits_in_memory(audits_.in_memory());
     return grpc::Status(grpc::Status::OK);
   });
 }

@@ -36,6 +36,8 @@ struct ServiceOptions {
   int max_validations_in_flight = 64;
   std::size_t max_open_uploads = 64;             // upload streams open at once; beyond, RESOURCE_EXHAUSTED
   std::chrono::milliseconds upload_idle_limit{60000};  // an upload silent this long is cancelled
+  // Ended audits kept in memory (the rest are read from the archive when asked for).
+  std::size_t ended_audits_in_memory = 16;
   std::string version = "0.1.0";
 };
 

@@ -3,6 +3,7 @@
 //   gatekeeperd [--listen 127.0.0.1:50051] [--data-dir DIR] [--config FILE.toml] [--workers N]
 //               [--queue N] [--audit-jobs N] [--port-file FILE] [--log-level info]
 //               [--tls-cert PEM --tls-key PEM [--tls-client-ca PEM]] [--token-file FILE]
+//               [--part-memory-gb 8] [--audits-in-memory 16] [--cad-check-seconds 120] [--cad-check-memory-gb 8]
 //
 // Without TLS it serves loopback addresses only (see server/access_control.h). Everything it
 // writes is private to its user: the data directory 0700, files 0600 (umask 077). CAD files are
@@ -24,6 +25,7 @@
 #include <toml++/toml.h>
 
 #include <csignal>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <pthread.h>
@@ -44,6 +46,8 @@ struct Config {
   int drain_seconds = 5;
   int cad_check_seconds = 120;
   double cad_check_memory_gb = 8.0;
+  double part_memory_gb = 8.0;
+  int audits_in_memory = 16;
   gk::server::AccessOptions access;
 };
 
@@ -57,6 +61,7 @@ bool apply_config_file(const std::string& path, Config& c, const CLI::App& app) 
     if (app.count("--queue") == 0) c.queue = t["queue"].value_or(c.queue);
     if (app.count("--audit-jobs") == 0) c.audit_jobs = t["audit_jobs"].value_or(c.audit_jobs);
     if (app.count("--log-level") == 0) c.log_level = t["log_level"].value_or(c.log_level);
+    if (app.count("--part-memory-gb") == 0) c.part_memory_gb = t["part_memory_gb"].value_or(c.part_memory_gb);
     if (app.count("--tls-cert") == 0) c.access.tls_cert_file = t["tls_cert"].value_or(c.access.tls_cert_file);
     if (app.count("--tls-key") == 0) c.access.tls_key_file = t["tls_key"].value_or(c.access.tls_key_file);
     if (app.count("--tls-client-ca") == 0) c.access.tls_client_ca = t["tls_client_ca"].value_or(c.access.tls_client_ca);
@@ -77,7 +82,7 @@ int main(int argc, char** argv) {
   CLI::App app{"gatekeeperd: decides, before a machine moves, whether the move is physically possible"};
   app.add_option("--listen", config.listen, "address:port to listen on (port 0: any free port)");
   app.add_option("--data-dir", config.data_dir, "where uploaded parts and their records are stored");
-  app.add_option("--config", config_file, "a TOML file with listen, data_dir, workers, queue, audit_jobs, log_level");
+  app.add_option("--config", config_file, "a TOML file with listen, data_dir, workers, queue, audit_jobs, log_level, part_memory_gb");
   app.add_option("--workers", config.workers, "threads for clearance queries and upload finishing")->check(CLI::Range(1, 64));
   app.add_option("--queue", config.queue, "queued jobs beyond which requests get RESOURCE_EXHAUSTED")->check(CLI::Range(1, 100000));
   app.add_option("--audit-jobs", config.audit_jobs, "audits run at once, on their own threads (a running audit never delays queries)")
@@ -94,6 +99,12 @@ int main(int argc, char** argv) {
   app.add_option("--tls-client-ca", config.access.tls_client_ca, "PEM CA: require client certificates it signed (mutual TLS)");
   app.add_option("--token-file", config.access.token_file,
                  "lines \"<read|write|admin> <token>\" (mode 0600): every call needs \"authorization: Bearer <token>\"");
+  app.add_option("--part-memory-gb", config.part_memory_gb,
+                 "memory for loaded parts (meshes and trees, estimated); beyond it the least recently used are read again from disk when needed")
+      ->check(CLI::Range(0.0001, 4096.0));
+  app.add_option("--audits-in-memory", config.audits_in_memory,
+                 "ended audits kept in memory; older ones are read from the database when asked for")
+      ->check(CLI::Range(1, 100000));
   app.add_option("--cad-check-seconds", config.cad_check_seconds, "longest a CAD file may take to read and tessellate")
       ->check(CLI::Range(1, 86400));
   app.add_option("--cad-check-memory-gb", config.cad_check_memory_gb, "most memory reading one CAD file may take")
@@ -149,7 +160,8 @@ int main(int argc, char** argv) {
     spdlog::error("{}", store.error().to_string());
     return 1;
   }
-  gk::server::PartRegistry parts(*store.value(), config.data_dir + "/bvh-cache");
+  gk::server::PartRegistry parts(*store.value(), config.data_dir + "/bvh-cache",
+                                 static_cast<std::size_t>(config.part_memory_gb * 1073741824.0));
   auto machines = gk::server::MachineRegistry::create(config.data_dir + "/machines");
   if (!machines.ok()) {
     spdlog::error("default machine model: {}", machines.error().to_string());
@@ -160,6 +172,7 @@ int main(int argc, char** argv) {
   options.audit_threads = config.workers;
   options.max_queued = static_cast<std::size_t>(config.queue);
   options.audit_jobs = config.audit_jobs;
+  options.ended_audits_in_memory = static_cast<std::size_t>(config.audits_in_memory);
   options.max_open_uploads = static_cast<std::size_t>(config.max_uploads);
   options.upload_idle_limit = std::chrono::milliseconds(static_cast<long long>(config.upload_idle_seconds * 1000.0));
   auto scenes = gk::server::SceneStore::open(config.data_dir);

@@ -77,7 +77,10 @@ Result<std::shared_ptr<const LoadedPart>> PartRegistry::load(const std::string& 
     std::lock_guard<std::mutex> lock(mutex_);
     for (double key : {0.0, deflection_mm}) {
       auto it = loaded_.find({id, key});
-      if (it != loaded_.end()) return it->second;
+      if (it != loaded_.end()) {
+        it->second.last_used = ++use_clock_;
+        return it->second.part;
+      }
     }
   }
   auto record = store_.get(id);
@@ -86,7 +89,10 @@ Result<std::shared_ptr<const LoadedPart>> PartRegistry::load(const std::string& 
   {
     std::lock_guard<std::mutex> lock(mutex_);
     auto it = loaded_.find({id, key_deflection});
-    if (it != loaded_.end()) return it->second;
+    if (it != loaded_.end()) {
+      it->second.last_used = ++use_clock_;
+      return it->second.part;
+    }
   }
   auto part = std::make_shared<LoadedPart>();
   double used_deflection = key_deflection;
@@ -100,9 +106,26 @@ Result<std::shared_ptr<const LoadedPart>> PartRegistry::load(const std::string& 
   part->bvh = bvh.value();
   // A CAD part of planes and straight edges is tessellated exactly; curved ones deviate.
   part->deflection_mm = part->shape.is_polyhedral() ? 0.0 : used_deflection;
+  const std::size_t bytes = part->mesh->triangle_count() * kBytesPerTriangle + part->mesh->vertices().size() * sizeof(Vec3);
   std::lock_guard<std::mutex> lock(mutex_);
-  loaded_[{id, key_deflection}] = part;
+  auto [it, fresh] = loaded_.insert({{id, key_deflection}, Loaded{part, bytes, ++use_clock_}});
+  if (!fresh) return it->second.part;  // another call loaded it meanwhile: one copy is kept
+  loaded_bytes_ += bytes;
+  // Over budget: drop the least recently used, never the part just loaded.
+  while (loaded_bytes_ > memory_budget_bytes_ && loaded_.size() > 1) {
+    auto oldest = loaded_.end();
+    for (auto e = loaded_.begin(); e != loaded_.end(); ++e)
+      if (e != it && (oldest == loaded_.end() || e->second.last_used < oldest->second.last_used)) oldest = e;
+    loaded_bytes_ -= oldest->second.bytes;
+    loaded_.erase(oldest);
+    ++evicted_;
+  }
   return std::shared_ptr<const LoadedPart>(part);
+}
+
+PartRegistry::MemoryStats PartRegistry::memory_stats() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return {loaded_.size(), loaded_bytes_, evicted_};
 }
 
 }  // namespace gk::server

@@ -26,7 +26,20 @@ struct LoadedPart : engine::PartGeometry {
 class PartRegistry {
  public:
   // BVHs are kept on disk in bvh_cache_dir (by mesh content), so a restarted daemon loads them.
-  PartRegistry(PartStore& store, const std::string& bvh_cache_dir) : store_(store), bvh_cache_(bvh_cache_dir) {}
+  // Loaded parts are kept in memory up to memory_budget_bytes (estimated); beyond it the least
+  // recently used are dropped (what a scene or a running query holds stays alive with it) and read
+  // again from disk when next asked for.
+  PartRegistry(PartStore& store, const std::string& bvh_cache_dir, std::size_t memory_budget_bytes = kDefaultPartMemoryBytes)
+      : store_(store), bvh_cache_(bvh_cache_dir), memory_budget_bytes_(memory_budget_bytes) {}
+  static constexpr std::size_t kDefaultPartMemoryBytes = 8ull << 30;
+  // A loaded part's memory, estimated from its triangles: the mesh with its BVH takes about 310-350
+  // bytes per triangle (docs/PERFORMANCE.md), its vertices 24 bytes each.
+  static constexpr std::size_t kBytesPerTriangle = 350;
+
+  struct MemoryStats {
+    std::size_t parts = 0, bytes = 0, evicted = 0;
+  };
+  MemoryStats memory_stats() const;
 
   // The part's mesh: mesh formats as stored, CAD formats tessellated at deflection_mm.
   Result<std::shared_ptr<const LoadedPart>> load(const std::string& id, double deflection_mm);
@@ -49,8 +62,16 @@ class PartRegistry {
  private:
   PartStore& store_;
   BvhCache bvh_cache_;
-  std::mutex mutex_;
-  std::map<std::pair<std::string, double>, std::shared_ptr<const LoadedPart>> loaded_;
+  struct Loaded {
+    std::shared_ptr<const LoadedPart> part;
+    std::size_t bytes = 0;
+    std::uint64_t last_used = 0;
+  };
+  const std::size_t memory_budget_bytes_;
+  mutable std::mutex mutex_;
+  std::map<std::pair<std::string, double>, Loaded> loaded_;
+  std::size_t loaded_bytes_ = 0, evicted_ = 0;
+  std::uint64_t use_clock_ = 0;
 };
 
 }  // namespace gk::server

@@ -1,6 +1,7 @@
 #include "server/scene_queries.h"
 
 #include "engine/exact_depth.h"
+#include "server/audit_archive.h"
 
 #include <algorithm>
 #include <sstream>
@@ -373,14 +374,30 @@ std::vector<std::string> AuditJob::answer_options() const {
   return out;
 }
 
-void AuditJobs::restore(const std::string& id, std::shared_ptr<AuditJob> job) {
+void AuditJobs::archived(const std::string& id) {
   std::lock_guard<std::mutex> lock(mutex_);
-  jobs_[id] = std::move(job);
+  if (!archive_ || jobs_.count(id) == 0) return;
+  ended_.remove(id);
+  ended_.push_back(id);
+  drop_beyond_limit();
+}
+
+void AuditJobs::drop_beyond_limit() {
+  while (ended_.size() > ended_in_memory_) {
+    jobs_.erase(ended_.front());
+    ended_.pop_front();
+  }
+}
+
+std::size_t AuditJobs::in_memory() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return jobs_.size();
 }
 
 void AuditJobs::remove(const std::string& id) {
   std::lock_guard<std::mutex> lock(mutex_);
   jobs_.erase(id);
+  ended_.remove(id);
 }
 
 std::string AuditJobs::add(std::shared_ptr<AuditJob> job) {
@@ -392,11 +409,29 @@ std::string AuditJobs::add(std::shared_ptr<AuditJob> job) {
   return id;
 }
 
-Result<std::shared_ptr<AuditJob>> AuditJobs::get(const std::string& id) const {
+Result<std::shared_ptr<AuditJob>> AuditJobs::get(const std::string& id) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = jobs_.find(id);
+    if (it != jobs_.end()) {
+      if (std::find(ended_.begin(), ended_.end(), id) != ended_.end()) {
+        ended_.remove(id);  // read again: the most recently read now
+        ended_.push_back(id);
+      }
+      return it->second;
+    }
+  }
+  if (!archive_) return Error{ErrorCode::kNotFound, "job_id", "no audit job '" + id + "'"};
+  auto loaded = archive_->load(id);  // outside the lock: a database read
+  if (!loaded.ok()) return loaded.error();
   std::lock_guard<std::mutex> lock(mutex_);
-  auto it = jobs_.find(id);
-  if (it == jobs_.end()) return Error{ErrorCode::kNotFound, "job_id", "no audit job '" + id + "'"};
-  return it->second;
+  auto [it, fresh] = jobs_.insert({id, loaded.value()});
+  std::shared_ptr<AuditJob> job = it->second;
+  if (fresh) {
+    ended_.push_back(id);
+    drop_beyond_limit();
+  }
+  return job;
 }
 
 }  // namespace gk::server

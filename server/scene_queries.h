@@ -9,10 +9,12 @@
 #include "server/part_registry.h"
 #include "server/scene_store.h"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <functional>
+#include <list>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -153,18 +155,31 @@ class AuditJob {
   std::vector<AuditedObject> objects_;
 };
 
+// The audit jobs: running ones in memory, ended ones archived (AuditArchive) and kept in memory only
+// up to a count, the least recently read dropped first and read again from the archive on demand
+// (a watcher or a report being written holds its job alive meanwhile). New ids never repeat an old
+// one: they carry this daemon's start time.
+class AuditArchive;
+
 class AuditJobs {
  public:
+  // archive may be null (nothing is then dropped: an ended job lives only in memory).
+  explicit AuditJobs(const AuditArchive* archive = nullptr, std::size_t ended_in_memory = 16)
+      : archive_(archive), ended_in_memory_(std::max<std::size_t>(1, ended_in_memory)) {}
   std::string add(std::shared_ptr<AuditJob> job);
-  // A job restored from the archive under its old id (new ids never repeat an old one: they carry
-  // this daemon's start time).
-  void restore(const std::string& id, std::shared_ptr<AuditJob> job);
+  // The job ended and is safely archived: from now on it may be dropped from memory.
+  void archived(const std::string& id);
   void remove(const std::string& id);
-  Result<std::shared_ptr<AuditJob>> get(const std::string& id) const;
+  Result<std::shared_ptr<AuditJob>> get(const std::string& id);
+  std::size_t in_memory() const;
 
  private:
+  void drop_beyond_limit();  // mutex_ held
+  const AuditArchive* archive_;
+  const std::size_t ended_in_memory_;
   mutable std::mutex mutex_;
   std::map<std::string, std::shared_ptr<AuditJob>> jobs_;
+  std::list<std::string> ended_;  // archived jobs in memory, least recently read first
   unsigned long long counter_ = 0;
   long long epoch_ms_ = std::chrono::duration_cast<std::chrono::milliseconds>(
                             std::chrono::system_clock::now().time_since_epoch()).count();

@@ -299,12 +299,14 @@ grpc::ServerUnaryReactor* GatekeeperService::StartAudit(grpc::CallbackServerCont
   const std::string id = audits_.add(job);
   PartRegistry* parts = &parts_;
   AuditArchive* archive = archive_;
-  if (!audit_pool_.try_submit([job, id, parts, archive] {
+  AuditJobs* audits = &audits_;
+  if (!audit_pool_.try_submit([job, id, parts, archive, audits] {
         const grpc::Status ran = guarded_status("StartAudit", [&] {
           job->run(*parts, [&](const AuditSnapshot& final_state) {
             if (!archive) return;
             auto saved = archive->save(id, *job, final_state);
-            if (!saved.ok()) spdlog::warn("audit {} not archived: {}", id, saved.error().to_string());
+            if (!saved.ok()) spdlog::warn("audit {} not archived (kept in memory): {}", id, saved.error().to_string());
+            else audits->archived(id);
           });
           return grpc::Status::OK;
         });

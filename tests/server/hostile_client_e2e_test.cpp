@@ -111,6 +111,76 @@ TEST(HostileClientE2E, ACadFileThatCrashesOcctsReaderIsRefusedAndTheDaemonServes
   expect_alive(*stub);
 }
 
+TEST(HostileClientE2E, LoadedPartsStayWithinTheMemoryBudgetAndAreReadAgainFromDisk) {
+  // 0.0005 GB = 537 KB: FCL's env mesh alone (2,180 triangles, about 920 KB estimated) is over it,
+  // so every query between env and rob drops one of them and reads it again.
+  Daemon daemon(testing::temp_dir("hostile-part-memory"), {"--part-memory-gb", "0.0005"});
+  auto stub = daemon.stub();
+  const std::string env = testing::upload_part_id(*stub, testing::read_file(testing::shared_data("meshes/fcl/env.obj")), "obj");
+  const std::string rob = testing::upload_part_id(*stub, testing::read_file(testing::shared_data("meshes/fcl/rob.obj")), "obj");
+  ASSERT_FALSE(env.empty());
+  ASSERT_FALSE(rob.empty());
+  pb::ClearanceQueryRequest request;
+  request.mutable_a()->set_part_id(env);
+  request.mutable_b()->set_part_id(rob);
+  request.mutable_b()->mutable_pose()->mutable_translation()->set_x_mm(1200.0);
+  double first = -1.0;
+  for (int round = 0; round < 4; ++round) {
+    grpc::ClientContext ctx;
+    ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+    pb::ClearanceQueryResponse response;
+    const grpc::Status status = stub->ClearanceQuery(&ctx, request, &response);
+    ASSERT_TRUE(status.ok()) << status.error_message();
+    if (round == 0) first = response.distance_mm();
+    EXPECT_EQ(response.distance_mm(), first) << "a part read again must answer the same";
+    std::swap(*request.mutable_a(), *request.mutable_b());  // the other load order
+  }
+  grpc::ClientContext ctx;
+  pb::ServerInfo info;
+  ASSERT_TRUE(stub->GetServerInfo(&ctx, pb::GetServerInfoRequest(), &info).ok());
+  EXPECT_GE(info.parts_evicted(), 3u);
+  EXPECT_EQ(info.parts_in_memory(), 1u) << "over budget, only the part loaded last is kept";
+  expect_alive(*stub);
+}
+
+TEST(HostileClientE2E, EndedAuditsBeyondTheMemoryLimitAreReadBackFromTheDatabase) {
+  Daemon daemon(testing::temp_dir("hostile-audit-memory"), {"--audits-in-memory", "1"});
+  auto stub = daemon.stub();
+  const std::string scene = robot_row(*stub, 4);
+  std::vector<pb::AuditReport> finished;
+  for (int i = 0; i < 3; ++i) {
+    pb::StartAuditRequest start;
+    start.set_scene_id(scene);
+    finished.push_back(testing::run_audit(*stub, start));
+  }
+  // Two of the three were dropped from memory; each is read back whole, twice over.
+  for (int pass = 0; pass < 2; ++pass)
+    for (const pb::AuditReport& then : finished) {
+      pb::GetAuditReportRequest get;
+      get.set_job_id(then.progress().job_id());
+      pb::AuditReport now;
+      grpc::ClientContext ctx;
+      ASSERT_TRUE(stub->GetAuditReport(&ctx, get, &now).ok()) << then.progress().job_id();
+      EXPECT_EQ(now.progress().state(), pb::DONE);
+      ASSERT_EQ(now.clashes_size(), then.clashes_size());
+      EXPECT_GT(now.clashes_size(), 0);
+      for (int k = 0; k < now.clashes_size(); ++k) {
+        EXPECT_EQ(now.clashes(k).object_a(), then.clashes(k).object_a());
+        EXPECT_EQ(now.clashes(k).object_b(), then.clashes(k).object_b());
+      }
+    }
+  // A re-audit against a baseline that is no longer in memory.
+  pb::StartAuditRequest again;
+  again.set_scene_id(scene);
+  again.set_baseline_job_id(finished.front().progress().job_id());
+  const pb::AuditReport re = testing::run_audit(*stub, again);
+  EXPECT_EQ(re.clashes_size(), finished.front().clashes_size());
+  grpc::ClientContext ictx;
+  pb::ServerInfo info;
+  ASSERT_TRUE(stub->GetServerInfo(&ictx, pb::GetServerInfoRequest(), &info).ok());
+  EXPECT_EQ(info.audits_in_memory(), 1u) << "four ended audits, one kept in memory";
+}
+
 TEST(HostileClientE2E, ThreeHundredWatchersOfARunningAuditNeitherKillItNorGoUnanswered) {
   Daemon daemon(testing::temp_dir("hostile-watch"));
   auto stub = daemon.stub();
