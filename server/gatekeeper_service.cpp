@@ -88,7 +88,7 @@ class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> 
     slot_ = 0;
     if (!upload_) return done({grpc::StatusCode::INVALID_ARGUMENT, "header: no upload header received"});
     auto* self = this;
-    const bool queued = service_.pool().try_submit([self] {
+    const bool queued = service_.upload_pool().try_submit([self] {
       const grpc::Status status = guarded_status("UploadPart", [&]() -> grpc::Status {
         return self->finish_upload();
       });
@@ -134,12 +134,15 @@ GatekeeperService::GatekeeperService(MachineRegistry& machines, PartRegistry& pa
                                      ServiceOptions options)
     : machines_(machines), parts_(parts), scenes_(scenes), audits_(archive, options.ended_audits_in_memory), archive_(archive),
       options_(options),
+      validation_pool_(options.validation_workers, static_cast<std::size_t>(options.max_validations_in_flight)),
+      part_validation_pool_(options.part_validation_workers, static_cast<std::size_t>(options.max_validations_in_flight)),
       pool_(options.workers, options.max_queued),
+      upload_pool_(options.upload_workers, options.max_queued),
       audit_pool_(options.audit_jobs, options.audit_queue),
       upload_slots_(options.max_open_uploads, options.upload_idle_limit) {
 }
 
-GatekeeperService::~GatekeeperService() { pool_.stop(); }
+GatekeeperService::~GatekeeperService() { stop_work(); }
 
 grpc::Status GatekeeperService::validate_one(const pb::ValidateStepRequest& request, const pb::SheetPart* default_part,
                                              const std::string& default_machine, pb::ValidateStepResponse* response) {
@@ -155,15 +158,10 @@ grpc::Status GatekeeperService::validate_one(const pb::ValidateStepRequest& requ
   }
 }
 
-grpc::Status GatekeeperService::validate_one_unguarded(const pb::ValidateStepRequest& request, const pb::SheetPart* default_part,
-                                                       const std::string& default_machine, pb::ValidateStepResponse* response) {
-  const auto t0 = Clock::now();
-  const std::string machine = request.machine_id().empty() ? default_machine : request.machine_id();
-  auto snapshot = machines_.get(machine);
-  if (!snapshot.ok()) return to_status(snapshot.error());
-  const pb::SheetPart& part_msg = request.has_part() || !default_part ? request.part() : *default_part;
-  // The exact question: request bytes, the part used, the machine, its model version, and the
-  // machine's current state when the request carries none.
+// The exact question: request bytes, the part used, the machine, its model version, and the
+// machine's current state when the request carries none.
+std::string GatekeeperService::answer_key(const pb::ValidateStepRequest& request, const pb::SheetPart& part_msg,
+                                          const MachineSnapshot& snapshot) {
   std::string key;
   {
     google::protobuf::io::StringOutputStream out(&key);
@@ -172,17 +170,39 @@ grpc::Status GatekeeperService::validate_one_unguarded(const pb::ValidateStepReq
     request.SerializeToCodedStream(&coded);
     part_msg.SerializeToCodedStream(&coded);
   }
-  key += "|" + snapshot.value().id + "|" + std::to_string(snapshot.value().version);
-  if (!request.has_state()) key += "|" + std::to_string(snapshot.value().state.hash());
-  if (auto hit = answers_.find(key)) {
-    *response = *hit;
-    response->set_decided_by("cache");
-    pb::StageTimes* times = response->mutable_times();
-    times->Clear();
-    times->set_cache_us(us_since(t0));
-    times->set_total_us(times->cache_us());
-    return grpc::Status::OK;
-  }
+  key += "|" + snapshot.id + "|" + std::to_string(snapshot.version);
+  if (!request.has_state()) key += "|" + std::to_string(snapshot.state.hash());
+  return key;
+}
+
+bool GatekeeperService::answer_from_cache(const std::string& key, Clock::time_point t0, pb::ValidateStepResponse* response) {
+  auto hit = answers_.find(key);
+  if (!hit) return false;
+  *response = *hit;
+  response->set_decided_by("cache");
+  pb::StageTimes* times = response->mutable_times();
+  times->Clear();
+  times->set_cache_us(us_since(t0));
+  times->set_total_us(times->cache_us());
+  return true;
+}
+
+bool GatekeeperService::answered_from_cache(const pb::ValidateStepRequest& request, pb::ValidateStepResponse* response) {
+  const auto t0 = Clock::now();
+  auto snapshot = machines_.get(request.machine_id());
+  if (!snapshot.ok()) return false;  // the worker answers the error
+  return answer_from_cache(answer_key(request, request.part(), snapshot.value()), t0, response);
+}
+
+grpc::Status GatekeeperService::validate_one_unguarded(const pb::ValidateStepRequest& request, const pb::SheetPart* default_part,
+                                                       const std::string& default_machine, pb::ValidateStepResponse* response) {
+  const auto t0 = Clock::now();
+  const std::string machine = request.machine_id().empty() ? default_machine : request.machine_id();
+  auto snapshot = machines_.get(machine);
+  if (!snapshot.ok()) return to_status(snapshot.error());
+  const pb::SheetPart& part_msg = request.has_part() || !default_part ? request.part() : *default_part;
+  const std::string key = answer_key(request, part_msg, snapshot.value());
+  if (answer_from_cache(key, t0, response)) return grpc::Status::OK;
   auto part = to_part(part_msg, parts_);
   if (!part.ok()) return to_status(part.error());
   auto step = to_step(request.step());
@@ -206,39 +226,61 @@ grpc::Status GatekeeperService::validate_one_unguarded(const pb::ValidateStepReq
   return grpc::Status::OK;
 }
 
-// Beyond the admission bound a validation is refused at once rather than queued.
-grpc::ServerUnaryReactor* GatekeeperService::refuse_busy(grpc::CallbackServerContext* ctx, const char* method) {
-  return finish(ctx, stats_, method, Clock::now(), {grpc::StatusCode::RESOURCE_EXHAUSTED, "too many validations at once: retry later"});
+// Validations run on their own pools, never on gRPC's callback threads (which only translate
+// and answer repeated questions from the cache): parametric parts on one, uploaded (mesh and CAD)
+// parts, which can take seconds cold, on another, so that they never queue the others. Beyond the
+// queue bound a validation is refused at once (RESOURCE_EXHAUSTED) rather than queued.
+template <typename Request, typename Response, typename Body>
+grpc::ServerUnaryReactor* GatekeeperService::run_validation(grpc::CallbackServerContext* ctx, const char* method,
+                                                            bool uploaded_part, const Request* request, Response* response,
+                                                            Body body) {
+  const auto t0 = Clock::now();
+  auto* reactor = ctx->DefaultReactor();
+  WorkPool& pool = uploaded_part ? part_validation_pool_ : validation_pool_;
+  const bool queued = pool.try_submit([this, ctx, method, request, response, reactor, t0, body] {
+    grpc::Status status;
+    if (ctx->IsCancelled()) status = {grpc::StatusCode::CANCELLED, "cancelled by the client"};
+    else if (past_deadline(ctx)) status = {grpc::StatusCode::DEADLINE_EXCEEDED, "deadline passed while queued"};
+    else status = guarded_status(method, [&] { return body(*request, response); });
+    stats_.record(method, us_since(t0), !status.ok());
+    reactor->Finish(status);
+  });
+  if (!queued) {
+    stats_.record(method, us_since(t0), true);
+    reactor->Finish({grpc::StatusCode::RESOURCE_EXHAUSTED, std::string("too many validations queued: retry later")});
+  }
+  return reactor;
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::ValidateStep(grpc::CallbackServerContext* ctx,
                                                           const pb::ValidateStepRequest* request,
                                                           pb::ValidateStepResponse* response) {
-  const AdmissionTicket ticket(validations_in_flight_, options_.max_validations_in_flight);
-  if (!ticket.admitted()) return refuse_busy(ctx, "ValidateStep");
-  return unary(ctx, stats_, "ValidateStep", [&]() -> grpc::Status {
-    if (past_deadline(ctx)) return grpc::Status({grpc::StatusCode::DEADLINE_EXCEEDED, "deadline passed"});
-    return grpc::Status(validate_one(*request, nullptr, "", response));
-  });
+  const auto t0 = Clock::now();
+  if (answered_from_cache(*request, response)) return finish(ctx, stats_, "ValidateStep", t0, grpc::Status::OK);
+  return run_validation(ctx, "ValidateStep", !request->part().part_id().empty(), request, response,
+                        [this](const pb::ValidateStepRequest& r, pb::ValidateStepResponse* out) {
+                          return validate_one(r, nullptr, "", out);
+                        });
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::ValidateSteps(grpc::CallbackServerContext* ctx,
                                                            const pb::ValidateStepsRequest* request,
                                                            pb::ValidateStepsResponse* response) {
-  const AdmissionTicket ticket(validations_in_flight_, options_.max_validations_in_flight);
-  if (!ticket.admitted()) return refuse_busy(ctx, "ValidateSteps");
-  return unary(ctx, stats_, "ValidateSteps", [&]() -> grpc::Status {
-    response->set_first_failure(-1);
-    for (int i = 0; i < request->steps_size(); ++i) {
+  bool uploaded_part = !request->part().part_id().empty();
+  for (const auto& step : request->steps()) uploaded_part = uploaded_part || !step.part().part_id().empty();
+  return run_validation(ctx, "ValidateSteps", uploaded_part, request, response,
+                        [this, ctx](const pb::ValidateStepsRequest& r, pb::ValidateStepsResponse* out) -> grpc::Status {
+    out->set_first_failure(-1);
+    for (int i = 0; i < r.steps_size(); ++i) {
       if (past_deadline(ctx) || ctx->IsCancelled())
         return grpc::Status({grpc::StatusCode::DEADLINE_EXCEEDED, "deadline passed after step " + std::to_string(i)});
-      pb::ValidateStepResponse* one = response->add_results();
-      grpc::Status s = validate_one(request->steps(i), request->has_part() ? &request->part() : nullptr, request->machine_id(), one);
+      pb::ValidateStepResponse* one = out->add_results();
+      grpc::Status s = validate_one(r.steps(i), r.has_part() ? &r.part() : nullptr, r.machine_id(), one);
       if (!s.ok())
         return grpc::Status({s.error_code(), "steps[" + std::to_string(i) + "]." + s.error_message()});
-      if (one->verdict() != pb::CLEAR && response->first_failure() < 0) {
-        response->set_first_failure(i);
-        if (request->stop_at_first_failure()) break;
+      if (one->verdict() != pb::CLEAR && out->first_failure() < 0) {
+        out->set_first_failure(i);
+        if (r.stop_at_first_failure()) break;
       }
     }
     return grpc::Status(grpc::Status::OK);

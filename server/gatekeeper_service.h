@@ -25,14 +25,19 @@ namespace gk::server {
 namespace pb = ::gatekeeper::v1;
 
 struct ServiceOptions {
-  int workers = 2;                 // clearance and upload-finishing threads
-  std::size_t max_queued = 64;     // beyond this, RESOURCE_EXHAUSTED
+  int workers = 2;                 // clearance query threads
+  std::size_t max_queued = 64;     // clearance queries and upload finishings queued; beyond, RESOURCE_EXHAUSTED
+  int upload_workers = 1;          // threads reading finished uploads (meshing CAD parts)
   int audit_threads = 2;           // threads of one audit job (its tiles, then its pairs)
   // Audit jobs run on their own pool, so that a running audit never delays a clearance query.
   int audit_jobs = 1;              // audits run at once
   std::size_t audit_queue = 16;    // audits waiting; beyond, RESOURCE_EXHAUSTED
-  // ValidateStep(s) run on the callback threads (a step is ~0.2 ms); beyond this many at once the
-  // call is answered RESOURCE_EXHAUSTED instead of queueing behind the others.
+  // ValidateStep(s) run on their own threads (gRPC's only translate and answer from the cache):
+  // parametric parts on validation_workers, uploaded parts (seconds cold on a large mesh) on
+  // part_validation_workers, so that they never queue the others. Each queue holds at most
+  // max_validations_in_flight; beyond, RESOURCE_EXHAUSTED.
+  int validation_workers = 2;
+  int part_validation_workers = 1;
   int max_validations_in_flight = 64;
   std::size_t max_open_uploads = 64;             // upload streams open at once; beyond, RESOURCE_EXHAUSTED
   std::chrono::milliseconds upload_idle_limit{60000};  // an upload silent this long is cancelled
@@ -49,12 +54,15 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
   ~GatekeeperService() override;
 
   void stop_work() {
+    validation_pool_.stop();
+    part_validation_pool_.stop();
     pool_.stop();
+    upload_pool_.stop();
     audit_pool_.stop();
   }
   RpcStats& stats() { return stats_; }
   PartRegistry& parts() { return parts_; }
-  WorkPool& pool() { return pool_; }
+  WorkPool& upload_pool() { return upload_pool_; }
   UploadSlots& upload_slots() { return upload_slots_; }
 
   grpc::ServerUnaryReactor* ValidateStep(grpc::CallbackServerContext* ctx, const pb::ValidateStepRequest* request,
@@ -116,7 +124,14 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
   AuditJobs& audits() { return audits_; }
 
  private:
-  grpc::ServerUnaryReactor* refuse_busy(grpc::CallbackServerContext* ctx, const char* method);
+  template <typename Request, typename Response, typename Body>
+  grpc::ServerUnaryReactor* run_validation(grpc::CallbackServerContext* ctx, const char* method, bool uploaded_part,
+                                           const Request* request, Response* response, Body body);
+  static std::string answer_key(const pb::ValidateStepRequest& request, const pb::SheetPart& part_msg,
+                                const MachineSnapshot& snapshot);
+  bool answer_from_cache(const std::string& key, std::chrono::steady_clock::time_point t0, pb::ValidateStepResponse* response);
+  // A repeated question (its own part, no default): answered on the calling thread.
+  bool answered_from_cache(const pb::ValidateStepRequest& request, pb::ValidateStepResponse* response);
 
   MachineRegistry& machines_;
   PartRegistry& parts_;
@@ -126,10 +141,12 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
   AnswerCache answers_;
   ServiceOptions options_;
   RpcStats stats_;
-  WorkPool pool_;
+  WorkPool validation_pool_;
+  WorkPool part_validation_pool_;
+  WorkPool pool_;  // clearance queries
+  WorkPool upload_pool_;
   WorkPool audit_pool_;
   UploadSlots upload_slots_;
-  std::atomic<int> validations_in_flight_{0};
 };
 
 }  // namespace gk::server

@@ -48,6 +48,9 @@ struct Config {
   double cad_check_memory_gb = 8.0;
   double part_memory_gb = 8.0;
   int audits_in_memory = 16;
+  int validation_workers = 2;
+  int part_validation_workers = 1;
+  int upload_workers = 1;
   gk::server::AccessOptions access;
 };
 
@@ -83,7 +86,13 @@ int main(int argc, char** argv) {
   app.add_option("--listen", config.listen, "address:port to listen on (port 0: any free port)");
   app.add_option("--data-dir", config.data_dir, "where uploaded parts and their records are stored");
   app.add_option("--config", config_file, "a TOML file with listen, data_dir, workers, queue, audit_jobs, log_level, part_memory_gb");
-  app.add_option("--workers", config.workers, "threads for clearance queries and upload finishing")->check(CLI::Range(1, 64));
+  app.add_option("--workers", config.workers, "threads for clearance queries")->check(CLI::Range(1, 64));
+  app.add_option("--validation-workers", config.validation_workers, "threads validating steps of parametric parts")
+      ->check(CLI::Range(1, 64));
+  app.add_option("--part-validation-workers", config.part_validation_workers,
+                 "threads validating steps of uploaded (mesh or CAD) parts, apart so that they never queue the others")
+      ->check(CLI::Range(1, 64));
+  app.add_option("--upload-workers", config.upload_workers, "threads reading finished uploads")->check(CLI::Range(1, 64));
   app.add_option("--queue", config.queue, "queued jobs beyond which requests get RESOURCE_EXHAUSTED")->check(CLI::Range(1, 100000));
   app.add_option("--audit-jobs", config.audit_jobs, "audits run at once, on their own threads (a running audit never delays queries)")
       ->check(CLI::Range(1, 16));
@@ -172,6 +181,9 @@ int main(int argc, char** argv) {
   options.audit_threads = config.workers;
   options.max_queued = static_cast<std::size_t>(config.queue);
   options.audit_jobs = config.audit_jobs;
+  options.validation_workers = config.validation_workers;
+  options.part_validation_workers = config.part_validation_workers;
+  options.upload_workers = config.upload_workers;
   options.ended_audits_in_memory = static_cast<std::size_t>(config.audits_in_memory);
   options.max_open_uploads = static_cast<std::size_t>(config.max_uploads);
   options.upload_idle_limit = std::chrono::milliseconds(static_cast<long long>(config.upload_idle_seconds * 1000.0));
