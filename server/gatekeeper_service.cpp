@@ -136,6 +136,7 @@ GatekeeperService::GatekeeperService(MachineRegistry& machines, PartRegistry& pa
       options_(options),
       validation_pool_(options.validation_workers, static_cast<std::size_t>(options.max_validations_in_flight)),
       part_validation_pool_(options.part_validation_workers, static_cast<std::size_t>(options.max_validations_in_flight)),
+      scene_pool_(options.scene_workers, options.max_queued),
       pool_(options.workers, options.max_queued),
       upload_pool_(options.upload_workers, options.max_queued),
       audit_pool_(options.audit_jobs, options.audit_queue),
@@ -228,36 +229,14 @@ grpc::Status GatekeeperService::validate_one_unguarded(const pb::ValidateStepReq
 
 // Validations run on their own pools, never on gRPC's callback threads (which only translate
 // and answer repeated questions from the cache): parametric parts on one, uploaded (mesh and CAD)
-// parts, which can take seconds cold, on another, so that they never queue the others. Beyond the
-// queue bound a validation is refused at once (RESOURCE_EXHAUSTED) rather than queued.
-template <typename Request, typename Response, typename Body>
-grpc::ServerUnaryReactor* GatekeeperService::run_validation(grpc::CallbackServerContext* ctx, const char* method,
-                                                            bool uploaded_part, const Request* request, Response* response,
-                                                            Body body) {
-  const auto t0 = Clock::now();
-  auto* reactor = ctx->DefaultReactor();
-  WorkPool& pool = uploaded_part ? part_validation_pool_ : validation_pool_;
-  const bool queued = pool.try_submit([this, ctx, method, request, response, reactor, t0, body] {
-    grpc::Status status;
-    if (ctx->IsCancelled()) status = {grpc::StatusCode::CANCELLED, "cancelled by the client"};
-    else if (past_deadline(ctx)) status = {grpc::StatusCode::DEADLINE_EXCEEDED, "deadline passed while queued"};
-    else status = guarded_status(method, [&] { return body(*request, response); });
-    stats_.record(method, us_since(t0), !status.ok());
-    reactor->Finish(status);
-  });
-  if (!queued) {
-    stats_.record(method, us_since(t0), true);
-    reactor->Finish({grpc::StatusCode::RESOURCE_EXHAUSTED, std::string("too many validations queued: retry later")});
-  }
-  return reactor;
-}
-
+// parts, which can take seconds cold, on another, so that they never queue the others.
 grpc::ServerUnaryReactor* GatekeeperService::ValidateStep(grpc::CallbackServerContext* ctx,
                                                           const pb::ValidateStepRequest* request,
                                                           pb::ValidateStepResponse* response) {
   const auto t0 = Clock::now();
   if (answered_from_cache(*request, response)) return finish(ctx, stats_, "ValidateStep", t0, grpc::Status::OK);
-  return run_validation(ctx, "ValidateStep", !request->part().part_id().empty(), request, response,
+  return run_queued(request->part().part_id().empty() ? validation_pool_ : part_validation_pool_, stats_, ctx, "ValidateStep",
+                    request, response,
                         [this](const pb::ValidateStepRequest& r, pb::ValidateStepResponse* out) {
                           return validate_one(r, nullptr, "", out);
                         });
@@ -268,7 +247,7 @@ grpc::ServerUnaryReactor* GatekeeperService::ValidateSteps(grpc::CallbackServerC
                                                            pb::ValidateStepsResponse* response) {
   bool uploaded_part = !request->part().part_id().empty();
   for (const auto& step : request->steps()) uploaded_part = uploaded_part || !step.part().part_id().empty();
-  return run_validation(ctx, "ValidateSteps", uploaded_part, request, response,
+  return run_queued(uploaded_part ? part_validation_pool_ : validation_pool_, stats_, ctx, "ValidateSteps", request, response,
                         [this, ctx](const pb::ValidateStepsRequest& r, pb::ValidateStepsResponse* out) -> grpc::Status {
     out->set_first_failure(-1);
     for (int i = 0; i < r.steps_size(); ++i) {

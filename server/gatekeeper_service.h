@@ -38,6 +38,7 @@ struct ServiceOptions {
   // max_validations_in_flight; beyond, RESOURCE_EXHAUSTED.
   int validation_workers = 2;
   int part_validation_workers = 1;
+  int scene_workers = 2;           // PutObject and MoveObject (their contacts); queue: max_queued
   int max_validations_in_flight = 64;
   std::size_t max_open_uploads = 64;             // upload streams open at once; beyond, RESOURCE_EXHAUSTED
   std::chrono::milliseconds upload_idle_limit{60000};  // an upload silent this long is cancelled
@@ -56,6 +57,7 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
   void stop_work() {
     validation_pool_.stop();
     part_validation_pool_.stop();
+    scene_pool_.stop();
     pool_.stop();
     upload_pool_.stop();
     audit_pool_.stop();
@@ -124,9 +126,6 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
   AuditJobs& audits() { return audits_; }
 
  private:
-  template <typename Request, typename Response, typename Body>
-  grpc::ServerUnaryReactor* run_validation(grpc::CallbackServerContext* ctx, const char* method, bool uploaded_part,
-                                           const Request* request, Response* response, Body body);
   static std::string answer_key(const pb::ValidateStepRequest& request, const pb::SheetPart& part_msg,
                                 const MachineSnapshot& snapshot);
   bool answer_from_cache(const std::string& key, std::chrono::steady_clock::time_point t0, pb::ValidateStepResponse* response);
@@ -143,6 +142,7 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
   RpcStats stats_;
   WorkPool validation_pool_;
   WorkPool part_validation_pool_;
+  WorkPool scene_pool_;  // scene edits that compute contacts (PutObject, MoveObject)
   WorkPool pool_;  // clearance queries
   WorkPool upload_pool_;
   WorkPool audit_pool_;

@@ -2,6 +2,7 @@
 #pragma once
 
 #include "server/rpc_stats.h"
+#include "server/work_pool.h"
 
 #include <grpcpp/grpcpp.h>
 #include <spdlog/spdlog.h>
@@ -81,6 +82,29 @@ template <typename Body>
 grpc::ServerUnaryReactor* unary(grpc::CallbackServerContext* ctx, RpcStats& stats, const char* method, Body&& body) {
   const auto t0 = Clock::now();
   return finish(ctx, stats, method, t0, guarded_status(method, std::forward<Body>(body)));
+}
+
+// A unary call whose work runs on `pool`, not on gRPC's callback thread: queued (RESOURCE_EXHAUSTED
+// when the queue is full), skipped when the client has gone or its deadline passed while queued.
+// body(request, response) returns the status; timing, finishing and the exception guard are here.
+template <typename Request, typename Response, typename Body>
+grpc::ServerUnaryReactor* run_queued(WorkPool& pool, RpcStats& stats, grpc::CallbackServerContext* ctx, const char* method,
+                                     const Request* request, Response* response, Body body) {
+  const auto t0 = Clock::now();
+  auto* reactor = ctx->DefaultReactor();
+  const bool queued = pool.try_submit([&stats, ctx, method, request, response, reactor, t0, body] {
+    grpc::Status status;
+    if (ctx->IsCancelled()) status = {grpc::StatusCode::CANCELLED, "cancelled by the client"};
+    else if (past_deadline(ctx)) status = {grpc::StatusCode::DEADLINE_EXCEEDED, "deadline passed while queued"};
+    else status = guarded_status(method, [&] { return body(*request, response); });
+    stats.record(method, us_since(t0), !status.ok());
+    reactor->Finish(status);
+  });
+  if (!queued) {
+    stats.record(method, us_since(t0), true);
+    reactor->Finish({grpc::StatusCode::RESOURCE_EXHAUSTED, std::string(method) + ": too much work queued, retry later"});
+  }
+  return reactor;
 }
 
 }  // namespace gk::server

@@ -184,21 +184,22 @@ grpc::Status GatekeeperService::contacts(const std::string& scene_id, const std:
 
 grpc::ServerUnaryReactor* GatekeeperService::PutObject(grpc::CallbackServerContext* ctx, const pb::PutObjectRequest* request,
                                                        pb::MoveResult* response) {
-  const auto t0 = Clock::now();
-  return unary(ctx, stats_, "PutObject", [&]() -> grpc::Status {
+  return run_queued(scene_pool_, stats_, ctx, "PutObject", request, response,
+                    [this, ctx](const pb::PutObjectRequest& put, pb::MoveResult* out) -> grpc::Status {
+    const auto t0 = Clock::now();
     if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
-    const pb::SceneObject& in = request->object();
+    const pb::SceneObject& in = put.object();
     if (auto bad = check_object(in, "object"); !bad.ok()) return to_status(bad.error());
     auto part = parts_.store().get(in.part_id());
     if (!part.ok()) return to_status(Error{part.error().code, "object.part_id", part.error().message});
     auto pose = to_stored_pose(in.pose(), "object.pose");
     if (!pose.ok()) return to_status(pose.error());
-    if (!std::isfinite(request->clearance_mm()) || request->clearance_mm() < 0.0)
+    if (!std::isfinite(put.clearance_mm()) || put.clearance_mm() < 0.0)
       return {grpc::StatusCode::INVALID_ARGUMENT, "clearance_mm: must be a finite distance >= 0"};
-    auto stored = scenes_.put(request->scene_id(), {in.object_id(), in.name(), in.category(), in.part_id(), pose.value(), in.group()});
+    auto stored = scenes_.put(put.scene_id(), {in.object_id(), in.name(), in.category(), in.part_id(), pose.value(), in.group()});
     if (!stored.ok()) return to_status(stored.error());
     // Stored once; then the new object's contacts, as a move would answer them.
-    return contacts(request->scene_id(), stored.value().id, request->clearance_mm(), pose.value().transform(), nullptr, t0, response);
+    return contacts(put.scene_id(), stored.value().id, put.clearance_mm(), pose.value().transform(), nullptr, t0, out);
   });
 }
 
@@ -231,10 +232,11 @@ grpc::ServerUnaryReactor* GatekeeperService::PutObjects(grpc::CallbackServerCont
 
 grpc::ServerUnaryReactor* GatekeeperService::MoveObject(grpc::CallbackServerContext* ctx, const pb::MoveObjectRequest* request,
                                                         pb::MoveResult* response) {
-  return unary(ctx, stats_, "MoveObject", [&]() -> grpc::Status {
-    if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
-    return grpc::Status(move(*request, response));
-  });
+  return run_queued(scene_pool_, stats_, ctx, "MoveObject", request, response,
+                    [this, ctx](const pb::MoveObjectRequest& r, pb::MoveResult* out) -> grpc::Status {
+                      if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
+                      return grpc::Status(move(r, out));
+                    });
 }
 
 grpc::ServerBidiReactor<pb::MoveObjectRequest, pb::MoveResult>* GatekeeperService::DragObject(grpc::CallbackServerContext* ctx) {
