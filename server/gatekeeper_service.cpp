@@ -189,10 +189,16 @@ bool GatekeeperService::answer_from_cache(const std::string& key, Clock::time_po
 }
 
 bool GatekeeperService::answered_from_cache(const pb::ValidateStepRequest& request, pb::ValidateStepResponse* response) {
-  const auto t0 = Clock::now();
-  auto snapshot = machines_.get(request.machine_id());
-  if (!snapshot.ok()) return false;  // the worker answers the error
-  return answer_from_cache(answer_key(request, request.part(), snapshot.value()), t0, response);
+  // On a callback thread: nothing may escape. Any trouble leaves the question to the worker.
+  try {
+    const auto t0 = Clock::now();
+    auto snapshot = machines_.get(request.machine_id());
+    if (!snapshot.ok()) return false;  // the worker answers the error
+    return answer_from_cache(answer_key(request, request.part(), snapshot.value()), t0, response);
+  } catch (...) {
+    response->Clear();
+    return false;
+  }
 }
 
 grpc::Status GatekeeperService::validate_one_unguarded(const pb::ValidateStepRequest& request, const pb::SheetPart* default_part,
@@ -236,10 +242,9 @@ grpc::ServerUnaryReactor* GatekeeperService::ValidateStep(grpc::CallbackServerCo
   const auto t0 = Clock::now();
   if (answered_from_cache(*request, response)) return finish(ctx, stats_, "ValidateStep", t0, grpc::Status::OK);
   return run_queued(request->part().part_id().empty() ? validation_pool_ : part_validation_pool_, stats_, ctx, "ValidateStep",
-                    request, response,
-                        [this](const pb::ValidateStepRequest& r, pb::ValidateStepResponse* out) {
-                          return validate_one(r, nullptr, "", out);
-                        });
+                    request, response, [this](const pb::ValidateStepRequest& r, pb::ValidateStepResponse* out) {
+                      return validate_one(r, nullptr, "", out);
+                    });
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::ValidateSteps(grpc::CallbackServerContext* ctx,

@@ -31,21 +31,6 @@ inline grpc::ServerUnaryReactor* finish(grpc::CallbackServerContext* ctx, RpcSta
   return reactor;
 }
 
-// Admission of a call that runs on the callback threads: at most `limit` at once; the ticket
-// holds its place until destroyed.
-class AdmissionTicket {
- public:
-  AdmissionTicket(std::atomic<int>& in_flight, int limit) : in_flight_(in_flight), admitted_(++in_flight_ <= limit) {}
-  ~AdmissionTicket() { --in_flight_; }
-  AdmissionTicket(const AdmissionTicket&) = delete;
-  AdmissionTicket& operator=(const AdmissionTicket&) = delete;
-  bool admitted() const { return admitted_; }
-
- private:
-  std::atomic<int>& in_flight_;
-  bool admitted_;
-};
-
 // A streaming call refused before it starts: its reactor finishes at once and frees itself.
 template <typename Reactor>
 class RefusedStream final : public Reactor {

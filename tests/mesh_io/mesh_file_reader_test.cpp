@@ -464,7 +464,8 @@ TEST(ReadMeshBytes, EmptyBytesIsAnError) {
 }
 
 TEST(ReadMeshBytes, GarbageBytesAreAnError) {
-  const auto read = read_mesh_bytes(std::string("\x01\x02\x03 not a mesh at all \xfe\xff", 26), "stl");
+  static const char kGarbage[] = "\x01\x02\x03 not a mesh at all \xfe\xff";
+  const auto read = read_mesh_bytes(std::string(kGarbage, sizeof kGarbage - 1), "stl");
   ASSERT_FALSE(read.ok());
   EXPECT_FALSE(read.error().message.empty());
 }
