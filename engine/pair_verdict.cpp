@@ -67,6 +67,22 @@ std::vector<Vec3> body_points(const PosedPart& side) {
   return out;
 }
 
+// The tessellation vertex of a part (world) farthest from a point: on its exact surface, and away
+// from a contact at that point.
+Vec3 farthest_vertex(const PosedPart& side, const Vec3& from) {
+  Vec3 best = from;
+  double best_d = -1.0;
+  for (const Vec3& v : side.part->mesh->vertices()) {
+    const Vec3 w = side.pose.apply(v);
+    const double dist = (w - from).squaredNorm();
+    if (dist > best_d) {
+      best_d = dist;
+      best = w;
+    }
+  }
+  return best;
+}
+
 void set_collision(PairVerdict& out, const Vec3& point, const std::string& reason) {
   out.result.verdict = Verdict::kCollision;
   out.result.inconclusive_reason = InconclusiveReason::kNone;
@@ -307,6 +323,21 @@ void decide_cad_mesh(const PosedPart& a, const PosedPart& b, bool cad_is_a, doub
     }
     patch.push_back(tri);
   }
+  // Points of the CAD part's exact surface (tessellation vertices): one inside the closed mesh puts
+  // the CAD part inside it.
+  auto cad_point_inside_mesh = [&](const std::vector<Vec3>& points, const char* reason) {
+    if (!m.is_closed_oriented()) return false;
+    const RigidTransform to_mesh = mesh_side.pose.inverse();
+    for (const Vec3& p : points) {
+      if (!inside_closed_mesh(*mesh_side.part->bvh, to_mesh.apply(p))) continue;
+      set_collision(out, p, reason);
+      out.error_bound_mm = tolerances::kBrepDistanceErrorMm + rounding;
+      out.result.contained = true;
+      out.result.containment_point = p;
+      return true;
+    }
+    return false;
+  };
   auto set_mesh_point_inside = [&](const Vec3& p) {
     set_collision(out, p, "a point of the mesh lies inside the CAD part's solid (exact faces)");
     out.error_bound_mm = tolerances::kBrepDistanceErrorMm + rounding;
@@ -329,9 +360,28 @@ void decide_cad_mesh(const PosedPart& a, const PosedPart& b, bool cad_is_a, doub
   }
   if (d.distance_mm <= tolerances::kContactMm) {
     if (mesh_says_apart) return;
-    return set_inconclusive(out, InconclusiveReason::kTessellationUnresolved,
-                            "the CAD part's exact faces meet the mesh's triangles; no point of the mesh was found inside "
-                            "the solid, and touching or crossing needs the mesh as a solid");
+    // The exact faces meet the triangles with no mesh vertex inside the solid: do the triangles
+    // enter it between their vertices (a face cutting a cap off a sphere)?
+    auto entering = occt::triangles_against_solid(cad.part->shape, cad.pose, patch, origin, tolerances::kContactMm);
+    if (!entering.ok()) return set_inconclusive(out, InconclusiveReason::kBrepUndecided, "exact faces: " + entering.error().to_string());
+    if (entering.value().relation == occt::TrianglesRelation::kEntering) {
+      set_collision(out, entering.value().point_inside, "the mesh's triangles enter the CAD part's solid (exact faces, Boolean common)");
+      out.error_bound_mm = tolerances::kBrepDistanceErrorMm + rounding;
+      return;
+    }
+    if (entering.value().relation == occt::TrianglesRelation::kUndecided)
+      return set_inconclusive(out, InconclusiveReason::kBrepUndecided,
+                              "the CAD part's exact faces meet the mesh's triangles, and the Boolean common of the solid "
+                              "and the triangles could not be classified");
+    // Touching from outside, unless the CAD part lies inside a closed mesh touching it from within:
+    // a point of the CAD part far from the contact tells.
+    if (cad_point_inside_mesh({farthest_vertex(cad, d.point_shape)}, "the CAD part lies inside the closed mesh, touching it from within"))
+      return;
+    out.face_a = cad_is_a ? d.face : 0;
+    out.face_b = cad_is_a ? 0 : d.face;
+    out.error_bound_mm = tolerances::kBrepDistanceErrorMm + rounding;
+    return set_touching(out, cad_is_a ? d.point_shape : d.point_triangles, cad_is_a ? d.point_triangles : d.point_shape,
+                        "the mesh's triangles meet the CAD part's exact faces without entering its solid (Boolean common)");
   }
   // Boundaries apart: nested, or disjoint.
   const std::vector<Vec3> bodies = body_points(mesh_side);
@@ -341,19 +391,7 @@ void decide_cad_mesh(const PosedPart& a, const PosedPart& b, bool cad_is_a, doub
     return set_inconclusive(out, InconclusiveReason::kBrepUndecided, "exact faces: " + inside.error().to_string());
   }
   if (inside.value() >= 0) return set_mesh_point_inside(bodies[static_cast<std::size_t>(inside.value())]);
-  if (m.is_closed_oriented()) {
-    // A point of the CAD part's exact surface (a tessellation vertex) inside the closed mesh.
-    const RigidTransform to_mesh = mesh_side.pose.inverse();
-    for (const Vec3& p : body_points(cad)) {
-      if (inside_closed_mesh(*mesh_side.part->bvh, to_mesh.apply(p))) {
-        set_collision(out, p, "the CAD part lies inside the closed mesh");
-        out.error_bound_mm = tolerances::kBrepDistanceErrorMm + rounding;
-        out.result.contained = true;
-        out.result.containment_point = p;
-        return;
-      }
-    }
-  }
+  if (cad_point_inside_mesh(body_points(cad), "the CAD part lies inside the closed mesh")) return;
   if (!std::isfinite(d.distance_mm)) {  // apart beyond reach: the mesh answer stands
     if (mesh_says_apart || mesh.verdict == Verdict::kClear) return;
     return set_inconclusive(out, InconclusiveReason::kTessellationUnresolved,

@@ -1,6 +1,7 @@
 #include "kernel/interference_volume.h"
 
 #include "kernel/bvh_ray.h"
+#include "kernel/exact_interference_volume.h"
 
 #include <algorithm>
 #include <array>
@@ -16,6 +17,9 @@ constexpr double kTargetRelativeError = 0.01;
 constexpr double kMaxRays = 1.1e6;
 // ...while fewer than this many rays cross the overlap (beyond, the grid resolves it). [rays]
 constexpr int kResolvedRays = 4096;
+// The exact fallback runs on meshes of at most this many triangles together: CGAL cannot be
+// interrupted, and this keeps it within about a second on one core (docs/PERFORMANCE.md). [triangles]
+constexpr std::size_t kMaxExactTriangles = 200000;
 
 
 // Parameters t where origin + t * dir crosses the mesh (mesh-local ray), through the BVH.
@@ -159,6 +163,23 @@ Result<VolumeEstimate> interference_volume(const MeshBvh& a, const RigidTransfor
     out = cast_rays(a, pose_a, b, pose_b, lo, hi, n, stop, stopped_early);
   }
   if (stopped_early) return stopped("the interference volume");
+  if (out.error_bound_mm3 <= kTargetRelativeError * out.volume_mm3) return out;
+  const std::size_t triangles = a.mesh().triangle_count() + b.mesh().triangle_count();
+  if (triangles > kMaxExactTriangles) {
+    out.exact_not_used = "the exact corefinement is limited to " + std::to_string(kMaxExactTriangles) + " triangles (" +
+                         std::to_string(triangles) + " here)";
+    return out;
+  }
+  if (stop.stop_requested()) return stopped("the interference volume");
+  auto exact = exact_interference_volume(a.mesh(), pose_a, b.mesh(), pose_b);
+  if (!exact.ok()) {
+    out.exact_not_used = exact.error().to_string();
+    return out;
+  }
+  out.method = VolumeMethod::kExactCorefinement;
+  out.cell_mm = 0.0;
+  out.volume_mm3 = exact.value().volume_mm3;
+  out.error_bound_mm3 = exact.value().error_bound_mm3;
   return out;
 }
 

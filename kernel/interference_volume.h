@@ -6,9 +6,10 @@
 // grid's plane) the overlap length is linear, so the centre ray gives the cell's volume exactly; a
 // cell crossed by an edge can err by at most its area times the overlap's height. A grid with few
 // rays inside the overlap (a corner, a sliver) is refined, up to about a million rays, until the
-// bound is within 1 % of the volume; on finely tessellated parts the bound stays loose (edges
-// everywhere) while the figure itself is far better. Exact B-Rep volumes come from occt_adapters
-// (Boolean common).
+// bound is within 1 % of the volume. Where it stays looser (finely tessellated parts: edges
+// everywhere; overlaps thinner than any grid), the exact corefinement
+// (kernel/exact_interference_volume.h) replaces the figure when the meshes allow it. Exact B-Rep
+// volumes come from occt_adapters (Boolean common).
 #pragma once
 
 #include "kernel/mesh_bvh.h"
@@ -16,14 +17,25 @@
 #include "kernel/status.h"
 #include "kernel/stop_token.h"
 
+#include <string>
+
 namespace gk {
 
+enum class VolumeMethod {
+  kRayCast,            // the grid's figure, within error_bound_mm3
+  kExactCorefinement,  // exact rationals; error_bound_mm3 is the final rounding to double
+};
+
 struct VolumeEstimate {
+  VolumeMethod method = VolumeMethod::kRayCast;
   double volume_mm3 = 0.0;
   double error_bound_mm3 = 0.0;  // |volume_mm3 - true shared volume| <= this
-  double cell_mm = 0.0;   // grid spacing used (the larger of the two cell sides)
+  double cell_mm = 0.0;   // grid spacing used (the larger of the two cell sides); 0 when exact
   int rays = 0;             // rays through both meshes' boxes
   int rays_in_overlap = 0;  // ... with a non-zero overlap length
+  // Why the exact fallback did not replace a ray-cast figure looser than 1 % (empty when it was
+  // not needed or did run).
+  std::string exact_not_used;
 };
 
 // Both meshes must be closed and consistently oriented; cells_per_axis in [4, 4096]: the first grid.

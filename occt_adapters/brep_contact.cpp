@@ -9,6 +9,7 @@
 
 #include <BRepAdaptor_Curve.hxx>
 #include <BRepAlgoAPI_Common.hxx>
+#include <BRepAlgoAPI_Fuse.hxx>
 #include <BRepAlgoAPI_Section.hxx>
 #include <BRepBndLib.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
@@ -18,6 +19,9 @@
 #include <BRepClass3d_SolidClassifier.hxx>
 #include <BRepExtrema_DistShapeShape.hxx>
 #include <BRepGProp.hxx>
+#include <BRepMesh_IncrementalMesh.hxx>
+#include <Poly_Triangulation.hxx>
+#include <TopLoc_Location.hxx>
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
 #include <GProp_GProps.hxx>
@@ -25,10 +29,12 @@
 #include <TopExp_Explorer.hxx>
 #include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
+#include <TopTools_ListOfShape.hxx>
 #include <GeomAPI_ProjectPointOnSurf.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Compound.hxx>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -100,11 +106,6 @@ std::vector<TopoDS_Shape> solids_of(const TopoDS_Shape& shape) {
   return out;
 }
 
-// The volume shared by the solids of a and of b, one Boolean per pair of solids whose boxes meet:
-// OCCT's Booleans assume each argument is free of self-interference, which an assembly of
-// overlapping solids is not (one common of the whole compounds called a shared 8000 mm^3 a touch).
-// Solids of one assembly that overlap each other are counted once per pair. False when a Boolean
-// failed.
 // The nearest point of a shape to a point (a vertex against the shape: point-surface extrema,
 // reliable for a point this close to the surface).
 bool nearest_point_on(const TopoDS_Shape& shape, const gp_Pnt& p, gp_Pnt& q) {
@@ -160,12 +161,50 @@ bool surface_point_inside_where_crossing(const TopoDS_Shape& a, const TopoDS_Sha
   return false;
 }
 
+// The solids of `shape` whose boxes meet `near`, those of them that overlap each other fused
+// into one: the solids of an assembly may interpenetrate (a bolt modelled through its plate), and a
+// volume summed solid by solid would count their shared part twice.
+bool solids_near(const TopoDS_Shape& shape, const Bnd_Box& near, std::vector<TopoDS_Shape>& out) {
+  out.clear();
+  std::vector<Bnd_Box> boxes;
+  for (const TopoDS_Shape& s : solids_of(shape)) {
+    Bnd_Box box;
+    BRepBndLib::Add(s, box);
+    if (box.IsOut(near)) continue;
+    out.push_back(s);
+    boxes.push_back(box);
+  }
+  bool boxes_meet = false;
+  for (std::size_t i = 0; i < boxes.size() && !boxes_meet; ++i)
+    for (std::size_t j = i + 1; j < boxes.size() && !boxes_meet; ++j) boxes_meet = !boxes[i].IsOut(boxes[j]);
+  if (!boxes_meet) return true;
+  TopTools_ListOfShape arguments, tools;
+  arguments.Append(out.front());
+  for (std::size_t i = 1; i < out.size(); ++i) tools.Append(out[i]);
+  BRepAlgoAPI_Fuse fuse;
+  fuse.SetArguments(arguments);
+  fuse.SetTools(tools);
+  fuse.Build();
+  if (!fuse.IsDone() || fuse.HasErrors()) return false;
+  out = solids_of(fuse.Shape());
+  return true;
+}
+
+// The volume shared by the solids of a and of b, one Boolean per pair of solids whose boxes meet:
+// OCCT's Booleans assume each argument is free of self-interference, which an assembly of
+// overlapping solids is not (one common of the whole compounds called a shared 8000 mm^3 a touch),
+// so each side's overlapping solids are fused first. False when a Boolean failed.
 bool common_volume(const TopoDS_Shape& a, const TopoDS_Shape& b, SharedVolume& out) {
   out = SharedVolume{};
-  for (const TopoDS_Shape& sa : solids_of(a)) {
+  Bnd_Box whole_a, whole_b;
+  BRepBndLib::Add(a, whole_a);
+  BRepBndLib::Add(b, whole_b);
+  std::vector<TopoDS_Shape> solids_a, solids_b;
+  if (!solids_near(a, whole_b, solids_a) || !solids_near(b, whole_a, solids_b)) return false;
+  for (const TopoDS_Shape& sa : solids_a) {
     Bnd_Box box_a;
     BRepBndLib::Add(sa, box_a);
-    for (const TopoDS_Shape& sb : solids_of(b)) {
+    for (const TopoDS_Shape& sb : solids_b) {
       Bnd_Box box_b;
       BRepBndLib::Add(sb, box_b);
       if (box_a.IsOut(box_b)) continue;
@@ -192,6 +231,52 @@ bool common_volume(const TopoDS_Shape& a, const TopoDS_Shape& b, SharedVolume& o
     }
   }
   return true;
+}
+
+// World triangles as planar faces in the local frame. A sliver that makes no face is kept as its
+// wire when `keep_slivers` (its edges still count for a distance); a zero-length edge drops it
+// (its points are on the neighbours' edges).
+TopoDS_Compound triangle_faces(const std::vector<Triangle>& triangles, const Vec3& frame_origin, bool keep_slivers) {
+  TopoDS_Compound patch;
+  BRep_Builder builder;
+  builder.MakeCompound(patch);
+  for (const Triangle& t : triangles) {
+    BRepBuilderAPI_MakePolygon polygon;
+    for (const Vec3& v : t) {
+      const Vec3 p = v - frame_origin;
+      polygon.Add(gp_Pnt(p.x(), p.y(), p.z()));
+    }
+    polygon.Close();
+    if (!polygon.IsDone()) continue;
+    BRepBuilderAPI_MakeFace face(polygon.Wire(), true);
+    if (face.IsDone()) builder.Add(patch, face.Face());
+    else if (keep_slivers) builder.Add(patch, polygon.Wire());
+  }
+  return patch;
+}
+
+// Points inside a face: the centroids of the triangles of its triangulation (at most
+// kMaxPoints, largest first); none when the face cannot be triangulated.
+std::vector<gp_Pnt> points_in_face(const TopoDS_Face& face) {
+  constexpr std::size_t kMaxPoints = 64;
+  BRepMesh_IncrementalMesh mesher(face, 1e-3, false, 0.5, false);
+  TopLoc_Location location;
+  const Handle(Poly_Triangulation) triangulation = BRep_Tool::Triangulation(face, location);
+  std::vector<std::pair<double, gp_Pnt>> found;
+  if (triangulation.IsNull()) return {};
+  for (int i = 1; i <= triangulation->NbTriangles(); ++i) {
+    int n1, n2, n3;
+    triangulation->Triangle(i).Get(n1, n2, n3);
+    const gp_Pnt p1 = triangulation->Node(n1).Transformed(location.Transformation());
+    const gp_Pnt p2 = triangulation->Node(n2).Transformed(location.Transformation());
+    const gp_Pnt p3 = triangulation->Node(n3).Transformed(location.Transformation());
+    const double area = gp_Vec(p1, p2).Crossed(gp_Vec(p1, p3)).Magnitude();
+    if (area > 0.0) found.emplace_back(area, gp_Pnt((p1.XYZ() + p2.XYZ() + p3.XYZ()) / 3.0));
+  }
+  std::sort(found.begin(), found.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
+  std::vector<gp_Pnt> out;
+  for (std::size_t i = 0; i < found.size() && i < kMaxPoints; ++i) out.push_back(found[i].second);
+  return out;
 }
 
 }  // namespace
@@ -368,21 +453,7 @@ Result<TriangleSetDistance> distance_to_triangles(const Shape& shape, const Rigi
   TriangleSetDistance out;
   std::string failure;
   auto ran = guarded("triangles", "measuring a shape against triangles", [&] {
-    TopoDS_Compound patch;
-    BRep_Builder builder;
-    builder.MakeCompound(patch);
-    for (const Triangle& t : triangles) {
-      BRepBuilderAPI_MakePolygon polygon;
-      for (const Vec3& v : t) {
-        const Vec3 p = v - frame_origin;
-        polygon.Add(gp_Pnt(p.x(), p.y(), p.z()));
-      }
-      polygon.Close();
-      if (!polygon.IsDone()) continue;  // a zero-length edge: its points are on the neighbours' edges
-      BRepBuilderAPI_MakeFace face(polygon.Wire(), true);
-      if (face.IsDone()) builder.Add(patch, face.Face());
-      else builder.Add(patch, polygon.Wire());  // a sliver: its edges still count
-    }
+    const TopoDS_Compound patch = triangle_faces(triangles, frame_origin, true);
     TopTools_IndexedMapOfShape faces;
     TopExp::MapShapes(placed.value().impl().shape, TopAbs_FACE, faces);
     BRepExtrema_DistShapeShape dist(placed.value().impl().shape, patch);
@@ -391,6 +462,45 @@ Result<TriangleSetDistance> distance_to_triangles(const Shape& shape, const Rigi
     out.point_shape = vec(dist.PointOnShape1(1)) + frame_origin;
     out.point_triangles = vec(dist.PointOnShape2(1)) + frame_origin;
     if (dist.SupportTypeShape1(1) == BRepExtrema_IsInFace) out.face = faces.FindIndex(dist.SupportOnShape1(1));
+  });
+  if (!ran.ok()) return ran.error();
+  if (!failure.empty()) return Error{ErrorCode::kInternal, "triangles", failure};
+  return out;
+}
+
+Result<TrianglesAgainstSolid> triangles_against_solid(const Shape& shape, const RigidTransform& pose,
+                                                     const std::vector<Triangle>& triangles, const Vec3& frame_origin,
+                                                     double tolerance_mm) {
+  if (shape.is_null()) return invalid_argument("shape", "is empty");
+  if (triangles.empty()) return invalid_argument("triangles", "is empty");
+  auto placed = place(shape, in_local_frame(pose, frame_origin));
+  if (!placed.ok()) return placed.error();
+  TrianglesAgainstSolid out;
+  std::string failure;
+  auto ran = guarded("triangles", "the Boolean common of a solid and triangles", [&] {
+    const TopoDS_Compound patch = triangle_faces(triangles, frame_origin, false);
+    bool undecided = false;
+    for (const TopoDS_Shape& solid : solids_of(placed.value().impl().shape)) {
+      BRepAlgoAPI_Common common(solid, patch);
+      if (!common.IsDone() || common.HasErrors()) return void(failure = "BRepAlgoAPI_Common failed");
+      // The common holds the triangles' parts inside the solid or on its boundary; points inside
+      // its pieces are classified (a piece inside the solid by less than tolerance_mm is a touch).
+      for (TopExp_Explorer e(common.Shape(), TopAbs_FACE); e.More(); e.Next()) {
+        const std::vector<gp_Pnt> points = points_in_face(TopoDS::Face(e.Current()));
+        if (points.empty()) undecided = true;
+        for (const gp_Pnt& p : points) {
+          BRepClass3d_SolidClassifier classifier(solid);
+          classifier.Perform(p, tolerance_mm);
+          if (classifier.State() == TopAbs_IN) {
+            out.relation = TrianglesRelation::kEntering;
+            out.point_inside = vec(p) + frame_origin;
+            return;
+          }
+          if (classifier.State() != TopAbs_ON) undecided = true;
+        }
+      }
+    }
+    out.relation = undecided ? TrianglesRelation::kUndecided : TrianglesRelation::kNotEntering;
   });
   if (!ran.ok()) return ran.error();
   if (!failure.empty()) return Error{ErrorCode::kInternal, "triangles", failure};

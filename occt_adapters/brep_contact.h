@@ -86,4 +86,19 @@ struct TriangleSetDistance {
 Result<TriangleSetDistance> distance_to_triangles(const Shape& shape, const RigidTransform& pose,
                                                   const std::vector<Triangle>& triangles, const Vec3& frame_origin);
 
+// Whether world triangles (a mesh's patch) enter the shape's solids at its pose: the Boolean
+// common of each solid with the triangles as planar faces, one interior point of each piece of
+// the common classified. kEntering: a point of the triangles lies inside a solid farther than
+// tolerance_mm from its boundary (a crossing, proven by that point). kNotEntering: the common is
+// empty or lies on the solid's boundary (touching, or apart). kUndecided: a piece could not be
+// classified.
+enum class TrianglesRelation { kNotEntering, kEntering, kUndecided };
+struct TrianglesAgainstSolid {
+  TrianglesRelation relation = TrianglesRelation::kUndecided;
+  Vec3 point_inside = Vec3::Zero();  // with kEntering: a point of the triangles inside the solid (world)
+};
+Result<TrianglesAgainstSolid> triangles_against_solid(const Shape& shape, const RigidTransform& pose,
+                                                     const std::vector<Triangle>& triangles, const Vec3& frame_origin,
+                                                     double tolerance_mm);
+
 }  // namespace gk::occt

@@ -14,6 +14,9 @@ PACKAGES=(
   # OCCT's CMake targets link TBB (libtbb.so): without it ninja stops at gatekeeperd
   libtbb-dev
   libeigen3-dev
+  # the exact mesh volume (kernel/exact_interference_volume): CGAL's corefinement, header-only,
+  # on GMP/MPFR rationals and Boost headers
+  libcgal-dev libgmp-dev libmpfr-dev libboost-dev
   # mesh files (STL, OBJ, OFF, PLY, glTF)
   # peers and test/benchmark frameworks
   libfcl-dev libgtest-dev libgmock-dev libbenchmark-dev

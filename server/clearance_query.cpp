@@ -163,7 +163,12 @@ std::string add_volume(const PosedSide& a, const PosedSide& b, const Vec3& near_
   response->set_interference_volume_mm3(volume.value().volume_mm3);
   response->set_volume_error_bound_mm3(volume.value().error_bound_mm3);
   response->set_volume_cell_mm(volume.value().cell_mm);
-  response->set_volume_method("mesh ray cast" + why_not_brep);
+  if (volume.value().method == VolumeMethod::kExactCorefinement)
+    response->set_volume_method("mesh exact corefinement" + why_not_brep);
+  else if (!volume.value().exact_not_used.empty())
+    response->set_volume_method("mesh ray cast (not exact: " + volume.value().exact_not_used + ")" + why_not_brep);
+  else
+    response->set_volume_method("mesh ray cast" + why_not_brep);
   return "";
 }
 

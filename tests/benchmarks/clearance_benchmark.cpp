@@ -5,6 +5,7 @@
 //   build/tests/benchmarks/clearance_benchmark [--benchmark_filter=...]
 #include "engine/pair_verdict.h"
 #include "kernel/contact_regions.h"
+#include "kernel/exact_interference_volume.h"
 #include "kernel/interference_volume.h"
 #include "kernel/contact_verdict.h"
 #include "kernel/mesh_bvh.h"
@@ -123,6 +124,8 @@ void BM_Cad_BrepRefinement(benchmark::State& state) {
 
 // The verdict of two CAD parts closer than their tessellation can tell (signed gaps uniform in
 // [-0.05, 0.05] mm, set on the meshes): the engine decides on the exact faces (engine/pair_verdict).
+// Range 1: B is a mesh part (the nut's tessellation, no B-Rep): the CAD part's exact faces against
+// its triangles, crossing told from touching by the Boolean common of the solid and the triangles.
 void BM_Cad_ExactFaceDecision(benchmark::State& state) {
   const CadPair& p = cad_pair();
   gk::engine::PartGeometry a, b;
@@ -136,6 +139,11 @@ void BM_Cad_ExactFaceDecision(benchmark::State& state) {
   b.shape = p.b;
   b.face_of_triangle = p.face_of_b;
   b.deflection_mm = 0.05;
+  if (state.range(0) == 1) {
+    b.shape = {};
+    b.face_of_triangle.clear();
+    b.deflection_mm = 0.0;
+  }
   gk::testing::Rng rng(32);
   std::uniform_real_distribution<double> gap(-0.05, 0.05);
   std::vector<RigidTransform> poses;
@@ -184,31 +192,67 @@ void BM_Cad_BrepExtremaWhole(benchmark::State& state) {
   state.counters["distance_sum_mm"] = sum;
 }
 
-// The depth vector of two large meshes (TR12J 67k, fandisk 32k scaled to about 500 mm) overlapping
-// by 0.5-3 mm.
-void BM_Large_DepthVector(benchmark::State& state) {
-  static const auto a = must(gk::MeshBvh::build(gk::testing::share(
-      must(gk::mesh_io::read_mesh_file(gk::testing::shared_data("meshes/occt/TR12J_OCC64K.stl"))))));
-  // fandisk is about 5 mm across as stored: scaled by 100, as in kernel_benchmark, to be a part.
-  static const auto b = [] {
+// Two large meshes (TR12J 67k, fandisk 32k scaled to about 500 mm) and poses of B overlapping A
+// by a depth drawn from [lo, hi] mm.
+struct LargePair {
+  std::shared_ptr<gk::MeshBvh> a, b;
+};
+
+// A shared mesh scaled about its box's centre to a box diagonal of `diagonal_mm`.
+std::shared_ptr<gk::MeshBvh> scaled_mesh(const std::string& relative, double diagonal_mm) {
+  gk::TriangleMesh m = must(gk::mesh_io::read_mesh_file(gk::testing::shared_data(relative)));
+  const double factor = diagonal_mm / m.bounds().diagonal().norm();
+  std::vector<Vec3> v = m.vertices();
+  for (Vec3& q : v) q *= factor;
+  (void)m.set_vertices(std::move(v));
+  return must(gk::MeshBvh::build(gk::testing::share(std::move(m))));
+}
+
+// Two large closed meshes for volumes: the refined elephant scan (89k) and fandisk (32k), both
+// scaled to about 500 mm.
+const LargePair& closed_pair() {
+  static const LargePair pair{scaled_mesh("meshes/cgal/refined_elephant.off", 500.0),
+                              scaled_mesh("meshes/cgal/fandisk_large.off", 500.0)};
+  return pair;
+}
+
+const LargePair& large_pair() {
+  static const LargePair pair = [] {
+    LargePair p;
+    p.a = must(gk::MeshBvh::build(gk::testing::share(
+        must(gk::mesh_io::read_mesh_file(gk::testing::shared_data("meshes/occt/TR12J_OCC64K.stl"))))));
+    // fandisk is about 5 mm across as stored: scaled by 100, as in kernel_benchmark, to be a part.
     gk::TriangleMesh m = must(gk::mesh_io::read_mesh_file(gk::testing::shared_data("meshes/cgal/fandisk_large.off")));
     std::vector<Vec3> v = m.vertices();
-    for (Vec3& p : v) p *= 100.0;
+    for (Vec3& q : v) q *= 100.0;
     (void)m.set_vertices(std::move(v));
-    return must(gk::MeshBvh::build(gk::testing::share(std::move(m))));
+    p.b = must(gk::MeshBvh::build(gk::testing::share(std::move(m))));
+    return p;
   }();
-  gk::testing::Rng rng(99);
-  std::uniform_real_distribution<double> overlap(0.5, 3.0);
+  return pair;
+}
+
+std::vector<RigidTransform> overlapping_poses(const LargePair& p, std::uint64_t seed, double lo, double hi, std::size_t count) {
+  gk::testing::Rng rng(seed);
+  std::uniform_real_distribution<double> overlap(lo, hi);
   std::vector<RigidTransform> poses;
-  const Vec3 ca = a->root_bounds().center(), cb = b->root_bounds().center();
-  const double reach = a->root_bounds().diagonal().norm() + b->root_bounds().diagonal().norm();
-  while (poses.size() < 8) {
+  const Vec3 ca = p.a->root_bounds().center(), cb = p.b->root_bounds().center();
+  const double reach = p.a->root_bounds().diagonal().norm() + p.b->root_bounds().diagonal().norm();
+  while (poses.size() < count) {
     RigidTransform pose = gk::testing::random_pose(rng, 0.0);
     pose.translation = ca + Vec3::Random().normalized() * reach - pose.rotation * cb;
-    const auto d = must(gk::distance(*a, {}, *b, pose));
+    const auto d = must(gk::distance(*p.a, {}, *p.b, pose));
     pose.translation -= (d.distance_mm + overlap(rng)) * (d.point_b - d.point_a).normalized();
     poses.push_back(pose);
   }
+  return poses;
+}
+
+// The depth vector of the large pair overlapping by 0.5-3 mm.
+void BM_Large_DepthVector(benchmark::State& state) {
+  const auto& a = large_pair().a;
+  const auto& b = large_pair().b;
+  const std::vector<RigidTransform> poses = overlapping_poses(large_pair(), 99, 0.5, 3.0, 8);
   std::vector<double> us;
   double sum = 0.0;
   for (auto _ : state) {
@@ -232,7 +276,7 @@ void BM_Volume_RayCastVsBoolean(benchmark::State& state) {
   const RigidTransform pose = RigidTransform::from_axis_angle(Vec3(0.3, 0.2, 1.0).normalized(), 10.0 * 3.14159265358979323846 / 180.0,
                                                               Vec3(2.0, 0.5, 0.0));
   const int cells = static_cast<int>(state.range(0));
-  double reference = 0.0, boolean_ms = 0.0, volume = 0.0, ray_ms = 0.0, bound = 0.0, cell = 0.0;
+  double reference = 0.0, boolean_ms = 0.0, volume = 0.0, ray_ms = 0.0, bound = 0.0, cell = 0.0, exact = 0.0;
   for (auto _ : state) {
     auto t0 = Clock::now();
     reference = must(gk::occt::interference_volume(nut, must(gk::occt::place(nut, pose))));
@@ -243,22 +287,54 @@ void BM_Volume_RayCastVsBoolean(benchmark::State& state) {
     volume = v.volume_mm3;
     bound = v.error_bound_mm3;
     cell = v.cell_mm;
+    exact = v.method == gk::VolumeMethod::kExactCorefinement ? 1.0 : 0.0;
   }
   state.counters["boolean_mm3"] = reference;
   state.counters["boolean_ms"] = boolean_ms;
-  state.counters["raycast_mm3"] = volume;
-  state.counters["raycast_ms"] = ray_ms;
-  state.counters["raycast_error_pct"] = 100.0 * (volume - reference) / reference;
-  state.counters["raycast_bound_pct"] = 100.0 * bound / reference;
-  state.counters["raycast_cell_mm"] = cell;
+  state.counters["mesh_mm3"] = volume;
+  state.counters["mesh_ms"] = ray_ms;
+  state.counters["mesh_error_pct"] = 100.0 * (volume - reference) / reference;
+  state.counters["mesh_bound_pct"] = 100.0 * bound / reference;
+  state.counters["mesh_cell_mm"] = cell;
+  state.counters["exact_fallback"] = exact;
+}
+
+// The shared volume of the closed pair as ClearanceQuery computes it (the ray cast, replaced by the
+// exact corefinement where its bound exceeds 1 %), overlapping by 0.5-3 mm (range 0) or by
+// 0.001-0.01 mm (range 1). Counters: how often the exact method ran, and its own time.
+void BM_Large_Volume(benchmark::State& state) {
+  const LargePair& p = closed_pair();
+  const bool thin = state.range(0) == 1;
+  const std::vector<RigidTransform> poses = overlapping_poses(p, thin ? 101 : 100, thin ? 0.001 : 0.5, thin ? 0.01 : 3.0, 8);
+  std::vector<double> us, exact_us;
+  int exact = 0;
+  double worst_relative_bound = 0.0;
+  for (auto _ : state)
+    for (const RigidTransform& pose : poses) {
+      auto t0 = Clock::now();
+      const gk::VolumeEstimate v = must(gk::interference_volume(*p.a, {}, *p.b, pose, 256));
+      us.push_back(since(t0));
+      if (v.method == gk::VolumeMethod::kExactCorefinement) ++exact;
+      if (v.volume_mm3 > 0.0) worst_relative_bound = std::max(worst_relative_bound, v.error_bound_mm3 / v.volume_mm3);
+      t0 = Clock::now();
+      benchmark::DoNotOptimize(must(gk::exact_interference_volume(p.a->mesh(), {}, p.b->mesh(), pose)).volume_mm3);
+      exact_us.push_back(since(t0));
+    }
+  report(state, us);
+  std::sort(exact_us.begin(), exact_us.end());
+  state.counters["exact_runs"] = exact;
+  state.counters["exact_alone_p50_ms"] = exact_us[exact_us.size() / 2] / 1000.0;
+  state.counters["exact_alone_max_ms"] = exact_us.back() / 1000.0;
+  state.counters["worst_bound_pct"] = 100.0 * worst_relative_bound;
 }
 
 }  // namespace
 
+BENCHMARK(BM_Large_Volume)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_Volume_RayCastVsBoolean)->Arg(64)->Arg(128)->Arg(256)->Arg(512)->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_Cad_MeshAnswer)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK(BM_Cad_BrepRefinement)->Unit(benchmark::kMillisecond)->Iterations(1);
-BENCHMARK(BM_Cad_ExactFaceDecision)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_Cad_ExactFaceDecision)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_Cad_BrepExtremaWhole)->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_Large_DepthVector)->Unit(benchmark::kMillisecond)->Iterations(1);
 

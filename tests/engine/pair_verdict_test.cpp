@@ -7,6 +7,7 @@
 #include "engine/pair_verdict.h"
 #include "kernel/penetration_depth.h"
 #include "kernel/tolerances.h"
+#include "tests/support/random_meshes.h"
 #include "occt_adapters/shape_import.h"
 #include "occt_adapters/shape_mesher.h"
 
@@ -260,18 +261,65 @@ TEST(CadPairVerdict, ACadPartAgainstAMeshIsNeverWronglyClear) {
       EXPECT_NE(v.value().result.verdict, Verdict::kClear);
     }
   }
-  // A face of a large mesh box cutting a cap off the sphere: no mesh vertex is inside, so the
-  // exact faces cannot be told touching from crossing: INCONCLUSIVE, typed, never CLEAR.
+  // A face of a large mesh box cutting a cap off the sphere: no mesh vertex is inside; the
+  // triangles themselves enter the solid (Boolean common), and a point of them inside proves it.
+  // Tangent, they touch; apart, the exact distance. The sphere written at 5e4 mm, or posed there.
   auto slab = mesh_part(BRepPrimAPI_MakeBox(gp_Pnt(0, -100, -100), gp_Pnt(20, 100, 100)).Shape());
-  for (double gap : {-0.01, -0.001}) {
-    auto v = decide_pair({ball.get(), {}}, {slab.get(), RigidTransform::from_translation(Vec3(5e4 + 50.0 + gap, 0, 0))});
-    ASSERT_TRUE(v.ok());
-    EXPECT_TRUE(v.value().result.verdict == Verdict::kCollision || v.value().result.verdict == Verdict::kInconclusive)
-        << describe(v.value());
-    if (v.value().result.verdict == Verdict::kInconclusive) {
-      EXPECT_EQ(v.value().result.inconclusive_reason, InconclusiveReason::kTessellationUnresolved);
+  auto ball_at_origin = cad_part(sphere(Vec3::Zero(), 50.0));
+  const RigidTransform ball_pose = RigidTransform::from_translation(Vec3(5e4, 0, 0));
+  for (double gap : kGaps) {
+    for (int posed = 0; posed < 2; ++posed) {
+      const PosedPart cad = posed ? PosedPart{ball_at_origin.get(), ball_pose} : PosedPart{ball.get(), {}};
+      auto v = decide_pair(cad, {slab.get(), RigidTransform::from_translation(Vec3(5e4 + 50.0 + gap, 0, 0))});
+      ASSERT_TRUE(v.ok());
+      expect_truth(v.value(), gap, "slab face, gap " + std::to_string(gap) + (posed ? " (posed)" : " (in the file)"));
+      if (gap < 0.0) {
+        // The proof is a point of the slab's face (x = 5e4 + 50 + gap) inside the exact sphere.
+        const Vec3 p = v.value().result.point_a;
+        EXPECT_NEAR(p.x(), 5e4 + 50.0 + gap, 1e-6);
+        EXPECT_LT((p - Vec3(5e4, 0, 0)).norm(), 50.0);
+      }
     }
   }
+  // The ball inside a closed mesh box, touching its wall from within: inside, so colliding.
+  auto crate = mesh_part(BRepPrimAPI_MakeBox(gp_Pnt(0, 0, 0), gp_Pnt(200, 200, 200)).Shape());
+  auto inner = decide_pair({ball_at_origin.get(), RigidTransform::from_translation(Vec3(50, 100, 100))}, {crate.get(), {}});
+  ASSERT_TRUE(inner.ok());
+  EXPECT_EQ(inner.value().result.verdict, Verdict::kCollision) << describe(inner.value());
+  EXPECT_TRUE(inner.value().result.contained);
+}
+
+// A mesh slab turned at random, its face at a random signed gap of -0.05..0.05 mm from an exact
+// sphere (below the deflection): the verdict is the analytic truth or INCONCLUSIVE, never a wrong
+// CLEAR, and INCONCLUSIVE stays rare.
+TEST(CadPairVerdict, RandomSlabsAgainstASphereWithinTheDeflection) {
+  auto ball = cad_part(sphere(Vec3::Zero(), 50.0));
+  auto slab = mesh_part(BRepPrimAPI_MakeBox(gp_Pnt(0, -100, -100), gp_Pnt(20, 100, 100)).Shape());
+  testing::Rng rng(5);
+  std::uniform_real_distribution<double> gap_of(-0.05, 0.05);
+  int inconclusive = 0, decided = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const double gap = gap_of(rng);
+    RigidTransform turn = testing::random_pose(rng, 0.0);
+    // The slab's face x = 0 (normal -x) faces the sphere from direction turn * (+x).
+    const Vec3 offset = trial % 2 ? Vec3(5e4, -5e4, 5e4) : Vec3::Zero();
+    turn.translation = offset + turn.rotation * Vec3(50.0 + gap, 0, 0);
+    auto v = decide_pair({ball.get(), RigidTransform::from_translation(offset)}, {slab.get(), turn});
+    ASSERT_TRUE(v.ok());
+    SCOPED_TRACE("trial " + std::to_string(trial) + " gap " + std::to_string(gap) + ": " + describe(v.value()));
+    if (v.value().result.verdict == Verdict::kInconclusive) {
+      ++inconclusive;
+      continue;
+    }
+    ++decided;
+    if (std::fabs(gap) <= tolerances::kContactMm) {
+      EXPECT_NE(v.value().result.verdict, Verdict::kClear);
+    } else {
+      expect_truth(v.value(), gap, "random slab");
+    }
+  }
+  EXPECT_LE(inconclusive, 2);
+  EXPECT_GE(decided, 38);
 }
 
 // A depth found on the tessellations frees the tessellations; moved by what check_depth_on_brep

@@ -13,36 +13,13 @@
 namespace gk {
 namespace {
 
-// A prism over a counter-clockwise profile in (x, y), z in [0, length]; cap triangles index the
-// profile (counter-clockwise seen from +z).
-TriangleMesh prism(const std::vector<Vec2>& profile, const std::vector<std::array<std::uint32_t, 3>>& cap, double length) {
-  const auto n = static_cast<std::uint32_t>(profile.size());
-  std::vector<Vec3> v;
-  for (const Vec2& p : profile) v.emplace_back(p.x(), p.y(), 0.0);
-  for (const Vec2& p : profile) v.emplace_back(p.x(), p.y(), length);
-  std::vector<TriangleMesh::Face> f;
-  for (const auto& t : cap) {
-    f.push_back({t[0] + n, t[1] + n, t[2] + n});  // top, seen from +z
-    f.push_back({t[0], t[2], t[1]});              // bottom, reversed
-  }
-  for (std::uint32_t i = 0; i < n; ++i) {
-    const std::uint32_t j = (i + 1) % n;
-    f.push_back({i, j, j + n});
-    f.push_back({i, j + n, i + n});
-  }
-  return TriangleMesh::create(std::move(v), std::move(f)).value();
-}
-
 TriangleMesh v_groove_block() {
   // A groove from (4, 10) down to (5, 6) and up to (6, 10), ear-clipped into five triangles.
   const std::vector<Vec2> p = {{0, 0}, {10, 0}, {10, 10}, {6, 10}, {5, 6}, {4, 10}, {0, 10}};
-  return prism(p, {{0, 1, 4}, {1, 2, 3}, {1, 3, 4}, {0, 4, 5}, {0, 5, 6}}, 20.0);
+  return testing::prism_mesh(p, {{0, 1, 4}, {1, 2, 3}, {1, 3, 4}, {0, 4, 5}, {0, 5, 6}}, 20.0);
 }
 
-TriangleMesh u_channel() {
-  const std::vector<Vec2> p = {{0, 0}, {10, 0}, {10, 10}, {8, 10}, {8, 2}, {2, 2}, {2, 10}, {0, 10}};
-  return prism(p, {{0, 1, 4}, {0, 4, 5}, {1, 2, 3}, {1, 3, 4}, {0, 5, 6}, {0, 6, 7}}, 20.0);
-}
+TriangleMesh u_channel() { return testing::u_channel_mesh(); }
 
 TEST(Convexity, GroovesAndChannelsAreNotConvexThoughEveryVertexIsOnTheHull) {
   const TriangleMesh groove = v_groove_block();

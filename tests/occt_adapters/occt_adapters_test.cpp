@@ -3,6 +3,8 @@
 #include "kernel/mesh_bvh.h"
 #include "kernel/interference_volume.h"
 #include "kernel/mesh_distance.h"
+#include "kernel/exact_interference_volume.h"
+#include "occt_adapters/brep_contact.h"
 #include "occt_adapters/exact_measures.h"
 #include "occt_adapters/shape_builders.h"
 #include "occt_adapters/shape_import.h"
@@ -160,6 +162,46 @@ TEST(ExactMeasures, RayCastMeshVolumeMatchesTheBooleanCommon) {
   const VolumeEstimate rays = gk::interference_volume(*mesh_a, {}, *mesh_b, turn, 512).value();
   // Midpoint rule on a 512 x 512 grid over the overlap: 0.5 % here.
   EXPECT_NEAR(rays.volume_mm3, exact, 0.005 * exact);
+}
+
+// Two independent exact methods on turned polyhedra: CGAL's corefinement of the meshes in
+// rationals, OCCT's Boolean common of the same boxes as B-Rep solids.
+TEST(ExactMeasures, ExactMeshVolumeMatchesTheBooleanCommonOnTurnedBoxes) {
+  testing::Rng rng(41);
+  std::uniform_real_distribution<double> size(2.0, 12.0);
+  int overlapping = 0;
+  for (int trial = 0; trial < 25; ++trial) {
+    const Vec3 ha(size(rng), size(rng), size(rng)), hb(size(rng), size(rng), size(rng));
+    RigidTransform pose = testing::random_pose(rng, 4.0);
+    const Vec3 offset = trial % 2 == 0 ? Vec3::Zero() : Vec3(50000, -50000, 50000);  // factory coordinates
+    pose.translation += offset;
+    const RigidTransform at_offset = RigidTransform::from_translation(offset);
+    const double boolean = shared_volume(make_box(-ha, ha).value(), at_offset, make_box(-hb, hb).value(), pose, offset)
+                               .value()
+                               .volume_mm3;
+    auto exact = exact_interference_volume(testing::box_mesh(-ha, ha), at_offset, testing::box_mesh(-hb, hb), pose);
+    ASSERT_TRUE(exact.ok()) << exact.error().to_string();
+    SCOPED_TRACE("trial " + std::to_string(trial));
+    EXPECT_NEAR(exact.value().volume_mm3, boolean, 1e-7 * std::max(1.0, boolean));
+    overlapping += boolean > 1.0 ? 1 : 0;
+  }
+  EXPECT_GT(overlapping, 10);
+}
+
+// The solids of an assembly may overlap each other (a bolt modelled through its plate): the volume
+// they share with another part counts their common region once.
+TEST(ExactMeasures, SharedVolumeCountsAnAssemblysOverlappingSolidsOnce) {
+  for (const Vec3& offset : {Vec3(0, 0, 0), Vec3(50000, 50000, -50000)}) {
+    const auto assembly = make_compound({make_box(Vec3(0, 0, 0), Vec3(10, 10, 10)).value(),
+                                         make_box(Vec3(5, 0, 0), Vec3(15, 10, 10)).value()})
+                              .value();
+    const auto probe = make_box(Vec3(4, 2, 2), Vec3(12, 8, 8)).value();
+    const RigidTransform at = RigidTransform::from_translation(offset);
+    // B within the union [0, 15] x [0, 10]^2: 8 x 6 x 6 (solid by solid it would be 216 + 252).
+    const SharedVolume v = shared_volume(assembly, at, probe, at, offset).value();
+    EXPECT_NEAR(v.volume_mm3, 288.0, 1e-6);
+    EXPECT_TRUE(v.crossing());
+  }
 }
 
 TEST(ExactMeasures, KernelMeshDistanceMatchesBRepWithinTheDeflection) {

@@ -47,6 +47,29 @@ TriangleMesh box_mesh(const Vec3& lo, const Vec3& hi) {
   return TriangleMesh::create(std::move(v), std::move(f)).value();
 }
 
+TriangleMesh prism_mesh(const std::vector<Vec2>& profile, const std::vector<std::array<std::uint32_t, 3>>& cap, double length) {
+  const auto n = static_cast<std::uint32_t>(profile.size());
+  std::vector<Vec3> v;
+  for (const Vec2& p : profile) v.emplace_back(p.x(), p.y(), 0.0);
+  for (const Vec2& p : profile) v.emplace_back(p.x(), p.y(), length);
+  std::vector<TriangleMesh::Face> f;
+  for (const auto& t : cap) {
+    f.push_back({t[0] + n, t[1] + n, t[2] + n});  // top, seen from +z
+    f.push_back({t[0], t[2], t[1]});              // bottom, reversed
+  }
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const std::uint32_t j = (i + 1) % n;
+    f.push_back({i, j, j + n});
+    f.push_back({i, j + n, i + n});
+  }
+  return TriangleMesh::create(std::move(v), std::move(f)).value();
+}
+
+TriangleMesh u_channel_mesh() {
+  const std::vector<Vec2> p = {{0, 0}, {10, 0}, {10, 10}, {8, 10}, {8, 2}, {2, 2}, {2, 10}, {0, 10}};
+  return prism_mesh(p, {{0, 1, 4}, {0, 4, 5}, {1, 2, 3}, {1, 3, 4}, {0, 5, 6}, {0, 6, 7}}, 20.0);
+}
+
 TriangleMesh random_soup(Rng& rng, int n, double extent, double size) {
   std::uniform_real_distribution<double> pos(-extent, extent), off(-size, size);
   std::vector<Vec3> v;

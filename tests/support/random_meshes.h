@@ -4,9 +4,11 @@
 #include "kernel/rigid_transform.h"
 #include "kernel/triangle_mesh.h"
 
+#include <array>
 #include <memory>
 #include <random>
 #include <string>
+#include <vector>
 
 namespace gk::testing {
 
@@ -23,6 +25,14 @@ TriangleMesh box_mesh(const Vec3& min, const Vec3& max);
 // A closed, outward-oriented prism over a regular n-gon about z, z in [0, length]: a polyhedral
 // cylinder.
 TriangleMesh cylinder_mesh(double radius, double length, int sides);
+
+// A closed, outward-oriented prism over a counter-clockwise profile in (x, y), z in [0, length];
+// the cap triangles index the profile (counter-clockwise seen from +z).
+TriangleMesh prism_mesh(const std::vector<Vec2>& profile, const std::vector<std::array<std::uint32_t, 3>>& cap, double length);
+
+// A U-channel: the 10 x 10 square less the slot [2, 8] x [2, 10], 20 long in z — the union of
+// the boxes [0,10]x[0,2], [0,2]x[2,10] and [8,10]x[2,10].
+TriangleMesh u_channel_mesh();
 
 // A soup of n random triangles of edge length up to size inside a cube of half side extent.
 TriangleMesh random_soup(Rng& rng, int n, double extent, double size);
