@@ -67,22 +67,6 @@ std::vector<Vec3> body_points(const PosedPart& side) {
   return out;
 }
 
-// The tessellation vertex of a part (world) farthest from a point: on its exact surface, and away
-// from a contact at that point.
-Vec3 farthest_vertex(const PosedPart& side, const Vec3& from) {
-  Vec3 best = from;
-  double best_d = -1.0;
-  for (const Vec3& v : side.part->mesh->vertices()) {
-    const Vec3 w = side.pose.apply(v);
-    const double dist = (w - from).squaredNorm();
-    if (dist > best_d) {
-      best_d = dist;
-      best = w;
-    }
-  }
-  return best;
-}
-
 void set_collision(PairVerdict& out, const Vec3& point, const std::string& reason) {
   out.result.verdict = Verdict::kCollision;
   out.result.inconclusive_reason = InconclusiveReason::kNone;
@@ -365,7 +349,7 @@ void decide_cad_mesh(const PosedPart& a, const PosedPart& b, bool cad_is_a, doub
     auto entering = occt::triangles_against_solid(cad.part->shape, cad.pose, patch, origin, tolerances::kContactMm);
     if (!entering.ok()) return set_inconclusive(out, InconclusiveReason::kBrepUndecided, "exact faces: " + entering.error().to_string());
     if (entering.value().relation == occt::TrianglesRelation::kEntering) {
-      set_collision(out, entering.value().point_inside, "the mesh's triangles enter the CAD part's solid (exact faces, Boolean common)");
+      set_collision(out, entering.value().point_inside, "the mesh's triangles enter the CAD part's solid (a point of them classified inside the exact solid)");
       out.error_bound_mm = tolerances::kBrepDistanceErrorMm + rounding;
       return;
     }
@@ -373,10 +357,19 @@ void decide_cad_mesh(const PosedPart& a, const PosedPart& b, bool cad_is_a, doub
       return set_inconclusive(out, InconclusiveReason::kBrepUndecided,
                               "the CAD part's exact faces meet the mesh's triangles, and the Boolean common of the solid "
                               "and the triangles could not be classified");
-    // Touching from outside, unless the CAD part lies inside a closed mesh touching it from within:
-    // a point of the CAD part far from the contact tells.
-    if (cad_point_inside_mesh({farthest_vertex(cad, d.point_shape)}, "the CAD part lies inside the closed mesh, touching it from within"))
-      return;
+    // Touching from outside, unless the CAD part lies inside a closed mesh touching it from within.
+    // The mesh's surface does not enter the solid, so each solid's interior is wholly inside the
+    // mesh or wholly outside: one interior point of each tells (its surface points may all lie on
+    // the mesh's walls, a cylinder whose caps are flush with a box's faces).
+    if (m.is_closed_oriented()) {
+      auto interior = occt::points_inside_solids(cad.part->shape, cad.pose, origin, tolerances::kContactMm);
+      if (!interior.ok())
+        return set_inconclusive(out, InconclusiveReason::kBrepUndecided, "exact faces: " + interior.error().to_string());
+      if (cad_point_inside_mesh(interior.value(), "the CAD part lies inside the closed mesh, touching it from within")) return;
+      if (interior.value().empty())
+        return set_inconclusive(out, InconclusiveReason::kBrepUndecided,
+                                "no point inside the CAD part's solid was found to tell it inside or outside the closed mesh");
+    }
     out.face_a = cad_is_a ? d.face : 0;
     out.face_b = cad_is_a ? 0 : d.face;
     out.error_bound_mm = tolerances::kBrepDistanceErrorMm + rounding;

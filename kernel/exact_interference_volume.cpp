@@ -4,6 +4,9 @@
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/orientation.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Polygon_mesh_processing/connected_components.h>
 #include <CGAL/Polygon_mesh_processing/corefinement.h>
 #include <CGAL/Side_of_triangle_mesh.h>
@@ -17,12 +20,32 @@ namespace gk {
 namespace {
 
 namespace PMP = CGAL::Polygon_mesh_processing;
+
+constexpr const char* kNoVolume =
+    "the mesh does not bound a volume: its shells intersect themselves or each other, or are nested with the wrong "
+    "orientation";
 using Kernel = CGAL::Exact_predicates_exact_constructions_kernel;
 using Point = Kernel::Point_3;
 using Mesh = CGAL::Surface_mesh<Point>;
 using ExactFT = Kernel::Exact_kernel::FT;
 using Primitive = CGAL::AABB_face_graph_triangle_primitive<Mesh>;
 using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
+
+// The mesh's own coordinates (doubles, exact predicates), wound outward as a whole.
+using FilteredKernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using LocalMesh = CGAL::Surface_mesh<FilteredKernel::Point_3>;
+
+Result<LocalMesh> local_mesh(const TriangleMesh& m, const char* side) {
+  const bool inward = m.signed_volume() < 0.0;
+  LocalMesh out;
+  std::vector<LocalMesh::Vertex_index> index;
+  index.reserve(m.vertices().size());
+  for (const Vec3& v : m.vertices()) index.push_back(out.add_vertex(FilteredKernel::Point_3(v.x(), v.y(), v.z())));
+  for (const auto& f : m.faces())
+    if (out.add_face(index[f[0]], index[f[inward ? 2 : 1]], index[f[inward ? 1 : 2]]) == LocalMesh::null_face())
+      return Error{ErrorCode::kFailedPrecondition, side, "a non-manifold vertex or edge: the mesh has no well-defined inside"};
+  return out;
+}
 
 // The posed mesh with every coordinate R v + t carried exactly, its faces wound outward.
 Result<Mesh> exact_posed(const TriangleMesh& m, const RigidTransform& pose, const char* side) {
@@ -114,10 +137,28 @@ void add_boundary_of_intersection(Mesh& from, const Mesh::Property_map<Mesh::Edg
 
 }  // namespace
 
+Result<bool> bounds_a_volume(const TriangleMesh& mesh, const char* side) {
+  if (!mesh.is_closed_oriented()) return Error{ErrorCode::kFailedPrecondition, side, "the mesh is not closed and consistently oriented"};
+  try {
+    auto local = local_mesh(mesh, side);
+    if (!local.ok()) return local.error();
+    if (!CGAL::is_closed(local.value())) return Error{ErrorCode::kFailedPrecondition, side, "the mesh is not closed"};
+    // Closed, free of self-intersections (between its shells too), and its shells nested with
+    // alternating orientation (a cavity wound inward): only then is "inside" what its triangles say.
+    if (PMP::does_self_intersect(local.value())) return false;
+    return PMP::does_bound_a_volume(local.value());
+  } catch (const std::exception& e) {
+    return Error{ErrorCode::kInternal, side, std::string("checking the mesh bounds a volume: ") + e.what()};
+  }
+}
+
 Result<ExactVolume> exact_interference_volume(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
                                               const RigidTransform& pose_b) {
-  if (!a.is_closed_oriented()) return Error{ErrorCode::kFailedPrecondition, "a", "the mesh is not closed and consistently oriented"};
-  if (!b.is_closed_oriented()) return Error{ErrorCode::kFailedPrecondition, "b", "the mesh is not closed and consistently oriented"};
+  for (const auto& [mesh, side] : {std::pair<const TriangleMesh*, const char*>{&a, "a"}, {&b, "b"}}) {
+    auto valid = bounds_a_volume(*mesh, side);
+    if (!valid.ok()) return valid.error();
+    if (!valid.value()) return Error{ErrorCode::kFailedPrecondition, side, kNoVolume};
+  }
   if (!pose_a.is_finite()) return invalid_argument("pose_a", "not finite");
   if (!pose_b.is_finite()) return invalid_argument("pose_b", "not finite");
   try {

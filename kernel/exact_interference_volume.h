@@ -19,6 +19,12 @@ struct ExactVolume {
   double error_bound_mm3 = 0.0;  // the exact figure's distance to the nearest double, at most
 };
 
+// Whether a closed mesh bounds a volume, so that its inside is well defined: closed, free of
+// self-intersections (its shells crossing each other included), its shells nested with alternating
+// orientation (checked on exact predicates). Wound inward as a whole is accepted. Errors name
+// `side`: not closed, non-manifold.
+Result<bool> bounds_a_volume(const TriangleMesh& mesh, const char* side);
+
 // Both meshes closed, consistently oriented, free of self-intersections near the overlap and
 // without non-manifold vertices; kFailedPrecondition (naming the side) when they are not: such a
 // mesh has no well-defined inside for a Boolean.

@@ -61,11 +61,16 @@ std::vector<std::array<double, 2>> inside(const std::vector<double>& t) {
 std::vector<char> cells_crossed_by_edges(const MeshBvh& m, const RigidTransform& pose, const Vec3& lo, const Vec3& hi, int n,
                                          double dx, double dy, std::vector<char> marked) {
   const double step = 0.5 * std::min(dx, dy);
+  // The cell of a coordinate, clamped in double before it becomes an int: an edge far outside a
+  // tiny overlap is billions of cells away.
+  auto cell_of = [n](double offset, double size) {
+    return static_cast<int>(std::clamp(std::floor(offset / size), -2.0, static_cast<double>(n) + 1.0));
+  };
   auto mark_box = [&](double x0, double x1, double y0, double y1) {
-    const int i0 = std::max(0, static_cast<int>(std::floor((x0 - lo.x()) / dx)) - 1);
-    const int i1 = std::min(n - 1, static_cast<int>(std::floor((x1 - lo.x()) / dx)) + 1);
-    const int j0 = std::max(0, static_cast<int>(std::floor((y0 - lo.y()) / dy)) - 1);
-    const int j1 = std::min(n - 1, static_cast<int>(std::floor((y1 - lo.y()) / dy)) + 1);
+    const int i0 = std::max(0, cell_of(x0 - lo.x(), dx) - 1);
+    const int i1 = std::min(n - 1, cell_of(x1 - lo.x(), dx) + 1);
+    const int j0 = std::max(0, cell_of(y0 - lo.y(), dy) - 1);
+    const int j1 = std::min(n - 1, cell_of(y1 - lo.y(), dy) + 1);
     for (int i = i0; i <= i1; ++i)
       for (int j = j0; j <= j1; ++j) marked[static_cast<std::size_t>(i) * n + j] = 1;
   };
@@ -80,11 +85,12 @@ std::vector<char> cells_crossed_by_edges(const MeshBvh& m, const RigidTransform&
       const Vec3& p = w[e];
       const Vec3& q = w[(e + 1) % 3];
       const double len = std::hypot(q.x() - p.x(), q.y() - p.y());
-      const int pieces = std::max(1, static_cast<int>(std::ceil(len / step)));
-      if (pieces > 4 * n) {  // an edge much longer than the grid: cover its whole box row by row
+      const double pieces_wanted = std::ceil(len / step);
+      if (pieces_wanted > 4.0 * n) {  // an edge much longer than the grid: cover its whole box row by row
         mark_box(std::min(p.x(), q.x()), std::max(p.x(), q.x()), std::min(p.y(), q.y()), std::max(p.y(), q.y()));
         continue;
       }
+      const int pieces = std::max(1, static_cast<int>(pieces_wanted));
       for (int k = 0; k < pieces; ++k) {
         const Vec3 a = p + (q - p) * (static_cast<double>(k) / pieces), b = p + (q - p) * (static_cast<double>(k + 1) / pieces);
         mark_box(std::min(a.x(), b.x()), std::max(a.x(), b.x()), std::min(a.y(), b.y()), std::max(a.y(), b.y()));
@@ -147,6 +153,16 @@ Result<VolumeEstimate> interference_volume(const MeshBvh& a, const RigidTransfor
                                            const RigidTransform& pose_b, int cells_per_axis, const StopToken& stop) {
   if (!a.mesh().is_closed_oriented()) return invalid_argument("a", "volume needs a closed, consistently oriented mesh");
   if (!b.mesh().is_closed_oriented()) return invalid_argument("b", "volume needs a closed, consistently oriented mesh");
+  // Both methods read "inside" from the triangles: shells crossing each other (two overlapping
+  // boxes in one file) or nested the wrong way round would be counted wrongly, by either.
+  for (const auto& [mesh, side] : {std::pair<const TriangleMesh*, const char*>{&a.mesh(), "a"}, {&b.mesh(), "b"}}) {
+    auto valid = bounds_a_volume(*mesh, side);
+    if (!valid.ok()) return valid.error();
+    if (!valid.value())
+      return Error{ErrorCode::kFailedPrecondition, side,
+                   "volume needs a mesh that bounds a volume: its shells intersect themselves or each other, or are "
+                   "nested with the wrong orientation"};
+  }
   if (cells_per_axis < 4 || cells_per_axis > 4096) return invalid_argument("cells_per_axis", "must be in [4, 4096]");
   if (!pose_a.is_rigid()) return invalid_argument("pose_a", "not a finite rigid transform");
   if (!pose_b.is_rigid()) return invalid_argument("pose_b", "not a finite rigid transform");
@@ -181,6 +197,25 @@ Result<VolumeEstimate> interference_volume(const MeshBvh& a, const RigidTransfor
   out.volume_mm3 = exact.value().volume_mm3;
   out.error_bound_mm3 = exact.value().error_bound_mm3;
   return out;
+}
+
+double tessellation_band_volume(const TriangleMesh& mesh, const RigidTransform& pose, double band_mm, const Aabb& region) {
+  if (!(band_mm > 0.0)) return 0.0;
+  constexpr double kPi = 3.14159265358979323846;
+  const Aabb reach = region.expanded(band_mm);
+  double total = 0.0;
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const Triangle local = mesh.triangle(t);
+    const Triangle w = {pose.apply(local[0]), pose.apply(local[1]), pose.apply(local[2])};
+    Aabb box;
+    for (const Vec3& p : w) box.extend(p);
+    if (!box.overlaps(reach)) continue;
+    const double area = 0.5 * (w[1] - w[0]).cross(w[2] - w[0]).norm();
+    const double perimeter = (w[1] - w[0]).norm() + (w[2] - w[1]).norm() + (w[0] - w[2]).norm();
+    total += 2.0 * area * band_mm + 0.5 * kPi * perimeter * band_mm * band_mm + 4.0 / 3.0 * kPi * band_mm * band_mm * band_mm;
+  }
+  // Rounding of the sum: far below the terms; a relative margin covers it.
+  return total * (1.0 + 1e-12);
 }
 
 }  // namespace gk

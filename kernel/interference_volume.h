@@ -43,4 +43,12 @@ struct VolumeEstimate {
 Result<VolumeEstimate> interference_volume(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
                                            const RigidTransform& pose_b, int cells_per_axis = 256, const StopToken& stop = {});
 
+// How far a volume measured on a tessellation can be from the volume on the exact surface it
+// approximates, within `region` (world): the tessellation is taken to lie within band_mm of the
+// surface and the surface within band_mm of it (a CAD part's deflection), so what lies between
+// them is within band_mm of the triangles that reach the region. Per triangle that neighbourhood
+// holds at most 2 A d + (pi / 2) P d^2 + (4 / 3) pi d^3 (Steiner's formula for a flat convex set
+// of area A and perimeter P) [mm^3].
+double tessellation_band_volume(const TriangleMesh& mesh, const RigidTransform& pose, double band_mm, const Aabb& region);
+
 }  // namespace gk

@@ -96,8 +96,13 @@ bool audit_pair(const AuditObject& oa, const AuditObject& ob, const AuditOptions
       ob.mesh->mesh().is_closed_oriented()) {
     auto volume = interference_volume(*oa.mesh, oa.pose, *ob.mesh, ob.pose, kAuditVolumeRaysPerAxis);
     if (volume.ok()) {
+      // A CAD part's triangles are not its surface: the bound covers the band between them.
+      const Aabb ba = transformed_box(oa.mesh->root_bounds(), oa.pose), bb = transformed_box(ob.mesh->root_bounds(), ob.pose);
+      const Aabb region{ba.min.cwiseMax(bb.min), ba.max.cwiseMin(bb.max)};
       out.volume_mm3 = volume.value().volume_mm3;
-      out.volume_error_bound_mm3 = volume.value().error_bound_mm3;
+      out.volume_error_bound_mm3 = volume.value().error_bound_mm3 +
+                                   tessellation_band_volume(oa.mesh->mesh(), oa.pose, oa.surface_deviation_mm, region) +
+                                   tessellation_band_volume(ob.mesh->mesh(), ob.pose, ob.surface_deviation_mm, region);
     }
   }
   return true;

@@ -19,6 +19,10 @@
 #include <BRepClass3d_SolidClassifier.hxx>
 #include <BRepExtrema_DistShapeShape.hxx>
 #include <BRepGProp.hxx>
+#include <BRepGProp_Face.hxx>
+#include <BRepTools.hxx>
+#include <BRepTopAdaptor_FClass2d.hxx>
+#include <gp_Pnt2d.hxx>
 #include <BRepMesh_IncrementalMesh.hxx>
 #include <Poly_Triangulation.hxx>
 #include <TopLoc_Location.hxx>
@@ -500,10 +504,70 @@ Result<TrianglesAgainstSolid> triangles_against_solid(const Shape& shape, const 
         }
       }
     }
+    // The Boolean can lose a shallow cut where a face's seams meet (a plane through a torus's
+    // seams): where the triangles and the solid's boundary cross, the middles of the section rings
+    // projected onto the triangles are classified too.
+    for (const TopoDS_Shape& solid : solids_of(placed.value().impl().shape)) {
+      gp_Pnt p;
+      if (surface_point_inside_where_crossing(solid, patch, p)) {
+        out.relation = TrianglesRelation::kEntering;
+        out.point_inside = vec(p) + frame_origin;
+        return;
+      }
+    }
     out.relation = undecided ? TrianglesRelation::kUndecided : TrianglesRelation::kNotEntering;
   });
   if (!ran.ok()) return ran.error();
   if (!failure.empty()) return Error{ErrorCode::kInternal, "triangles", failure};
+  return out;
+}
+
+Result<std::vector<Vec3>> points_inside_solids(const Shape& shape, const RigidTransform& pose, const Vec3& frame_origin,
+                                               double tolerance_mm) {
+  if (shape.is_null()) return invalid_argument("shape", "is empty");
+  auto placed = place(shape, in_local_frame(pose, frame_origin));
+  if (!placed.ok()) return placed.error();
+  std::vector<Vec3> out;
+  auto ran = guarded("shape", "finding points inside its solids", [&] {
+    for (TopExp_Explorer s(placed.value().impl().shape, TopAbs_SOLID); s.More(); s.Next()) {
+      Bnd_Box box;
+      BRepBndLib::Add(s.Current(), box);
+      const double size = std::sqrt(box.SquareExtent());
+      bool found = false;
+      // Points of the faces (inside their trimmed domains) moved inward along the outward normal,
+      // kept when the classifier puts them inside by more than the tolerance.
+      for (TopExp_Explorer f(s.Current(), TopAbs_FACE); f.More() && !found; f.Next()) {
+        const TopoDS_Face face = TopoDS::Face(f.Current());
+        double u0, u1, v0, v1;
+        BRepTools::UVBounds(face, u0, u1, v0, v1);
+        BRepTopAdaptor_FClass2d domain(face, 1e-9);
+        BRepGProp_Face surface(face);
+        constexpr int kGrid = 5;
+        for (int i = 0; i < kGrid && !found; ++i)
+          for (int j = 0; j < kGrid && !found; ++j) {
+            const double u = u0 + (u1 - u0) * (i + 0.5) / kGrid, v = v0 + (v1 - v0) * (j + 0.5) / kGrid;
+            if (domain.Perform(gp_Pnt2d(u, v)) != TopAbs_IN) continue;
+            gp_Pnt p;
+            gp_Vec normal;
+            surface.Normal(u, v, p, normal);
+            if (normal.Magnitude() <= 0.0) continue;
+            normal.Normalize();
+            for (double step : {1e-2, 1e-3, 1e-4}) {
+              const gp_Pnt q = p.Translated(-normal * (step * size));
+              if (step * size <= 2.0 * tolerance_mm) break;
+              BRepClass3d_SolidClassifier classifier(s.Current());
+              classifier.Perform(q, tolerance_mm);
+              if (classifier.State() == TopAbs_IN) {
+                out.push_back(vec(q) + frame_origin);
+                found = true;
+                break;
+              }
+            }
+          }
+      }
+    }
+  });
+  if (!ran.ok()) return ran.error();
   return out;
 }
 

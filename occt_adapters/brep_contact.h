@@ -101,4 +101,10 @@ Result<TrianglesAgainstSolid> triangles_against_solid(const Shape& shape, const 
                                                      const std::vector<Triangle>& triangles, const Vec3& frame_origin,
                                                      double tolerance_mm);
 
+// A point strictly inside each solid of the shape at its pose (world; farther in than tolerance_mm,
+// as OCCT's classifier says): a point of a face moved inward along its normal. A solid too thin
+// for that gives none.
+Result<std::vector<Vec3>> points_inside_solids(const Shape& shape, const RigidTransform& pose, const Vec3& frame_origin,
+                                               double tolerance_mm);
+
 }  // namespace gk::occt

@@ -135,6 +135,12 @@ std::string add_depth(const PosedSide& a, const PosedSide& b, const Vec3& along,
   return "";
 }
 
+// Where the two parts' boxes overlap (world).
+Aabb overlap_box(const PosedSide& a, const PosedSide& b) {
+  const Aabb ba = transformed_box(a.part->mesh->bounds(), a.pose), bb = transformed_box(b.part->mesh->bounds(), b.pose);
+  return {ba.min.cwiseMax(bb.min), ba.max.cwiseMin(bb.max)};
+}
+
 std::string add_volume(const PosedSide& a, const PosedSide& b, const Vec3& near_point, const StopToken& stop,
                        pb::ClearanceQueryResponse* response) {
   std::string why_not_brep;
@@ -158,17 +164,26 @@ std::string add_volume(const PosedSide& a, const PosedSide& b, const Vec3& near_
     why_not_brep = " (the Boolean common failed: " + exact.error().message + ")";
   }
   auto volume = interference_volume(*a.part->bvh, a.pose, *b.part->bvh, b.pose, kVolumeRaysPerAxis, stop);
-  if (!volume.ok())
-    return "volume: " + volume.error().to_string() + " (an open or non-manifold mesh has no inside)" + why_not_brep;
+  if (!volume.ok()) {
+    response->set_interference_volume_mm3(-1.0);
+    return "volume: " + volume.error().to_string() + why_not_brep;
+  }
+  // A CAD part measured on its tessellation: the figure is the triangles', the bound covers the
+  // band between them and the exact faces.
+  const Aabb region = overlap_box(a, b);
+  const double band = tessellation_band_volume(*a.part->mesh, a.pose, a.part->deflection_mm, region) +
+                      tessellation_band_volume(*b.part->mesh, b.pose, b.part->deflection_mm, region);
+  const std::string on_tessellation = band > 0.0 ? " on the CAD part's tessellation (the bound includes its deflection)" : "";
   response->set_interference_volume_mm3(volume.value().volume_mm3);
-  response->set_volume_error_bound_mm3(volume.value().error_bound_mm3);
+  response->set_volume_error_bound_mm3(volume.value().error_bound_mm3 + band);
   response->set_volume_cell_mm(volume.value().cell_mm);
   if (volume.value().method == VolumeMethod::kExactCorefinement)
-    response->set_volume_method("mesh exact corefinement" + why_not_brep);
+    response->set_volume_method("mesh exact corefinement" + on_tessellation + why_not_brep);
   else if (!volume.value().exact_not_used.empty())
-    response->set_volume_method("mesh ray cast (not exact: " + volume.value().exact_not_used + ")" + why_not_brep);
+    response->set_volume_method("mesh ray cast" + on_tessellation + " (not exact: " + volume.value().exact_not_used + ")" +
+                                why_not_brep);
   else
-    response->set_volume_method("mesh ray cast" + why_not_brep);
+    response->set_volume_method("mesh ray cast" + on_tessellation + why_not_brep);
   return "";
 }
 

@@ -5,6 +5,8 @@
 // BREP bytes and read back through the project's reader, as an upload would be.
 #include "engine/exact_depth.h"
 #include "engine/pair_verdict.h"
+#include "kernel/exact_interference_volume.h"
+#include "kernel/interference_volume.h"
 #include "kernel/penetration_depth.h"
 #include "kernel/tolerances.h"
 #include "tests/support/random_meshes.h"
@@ -320,6 +322,65 @@ TEST(CadPairVerdict, RandomSlabsAgainstASphereWithinTheDeflection) {
   }
   EXPECT_LE(inconclusive, 2);
   EXPECT_GE(decided, 38);
+}
+
+// Found by review: every tessellation vertex of a cylinder whose caps are flush with a closed mesh
+// box's faces lies on the box's walls, so a vertex could not tell inside from outside; a cone
+// standing in a box likewise. Inside is a collision.
+TEST(CadPairVerdict, ACadPartInsideAClosedMeshWithItsFacesFlushCollides) {
+  auto cylinder = cad_part(BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 10.0, 40.0).Shape());
+  const TopoDS_Shape boxes[] = {BRepPrimAPI_MakeBox(gp_Pnt(-40, -40, 0), gp_Pnt(40, 40, 40)).Shape(),
+                                BRepPrimAPI_MakeBox(gp_Pnt(-10, -40, 0), gp_Pnt(40, 40, 40)).Shape(),  // side tangent too
+                                BRepPrimAPI_MakeBox(gp_Pnt(-40, -40, 0), gp_Pnt(40, 40, 50)).Shape()};
+  for (const TopoDS_Shape& shape : boxes) {
+    auto crate = mesh_part(shape);
+    for (const Vec3& offset : {Vec3(0, 0, 0), Vec3(5e4, 5e4, -5e4)}) {
+      const RigidTransform at = RigidTransform::from_translation(offset);
+      auto v = decide_pair({cylinder.get(), at}, {crate.get(), at});
+      ASSERT_TRUE(v.ok());
+      EXPECT_EQ(v.value().result.verdict, Verdict::kCollision) << describe(v.value());
+      auto swapped = decide_pair({crate.get(), at}, {cylinder.get(), at});
+      ASSERT_TRUE(swapped.ok());
+      EXPECT_EQ(swapped.value().result.verdict, Verdict::kCollision) << describe(swapped.value());
+    }
+  }
+  // The same cylinder standing on the box's top face from outside only touches.
+  auto under = mesh_part(BRepPrimAPI_MakeBox(gp_Pnt(-40, -40, -40), gp_Pnt(40, 40, 0)).Shape());
+  auto touch = decide_pair({cylinder.get(), {}}, {under.get(), {}});
+  ASSERT_TRUE(touch.ok());
+  EXPECT_EQ(touch.value().result.verdict, Verdict::kTouching) << describe(touch.value());
+}
+
+// Found by review: a flat mesh face cutting a torus where its seams meet lost the cut in the
+// Boolean common (TOUCHING at 0.005-0.049 mm deep); the section rings find it.
+TEST(CadPairVerdict, AFlatFaceCuttingATorusAtItsSeamsCollides) {
+  auto torus = cad_part(BRepPrimAPI_MakeTorus(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 20.0, 5.0).Shape());
+  auto slab = mesh_part(BRepPrimAPI_MakeBox(gp_Pnt(0, -30, -30), gp_Pnt(10, 30, 30)).Shape());
+  for (double gap : {-0.049, -0.03, -0.02, -0.005, -0.001, 0.0, 0.003, 0.03}) {
+    auto v = decide_pair({torus.get(), {}}, {slab.get(), RigidTransform::from_translation(Vec3(25.0 + gap, 0, 0))});
+    ASSERT_TRUE(v.ok());
+    expect_truth(v.value(), gap, "torus seam, gap " + std::to_string(gap));
+  }
+}
+
+// A shared volume measured on a CAD part's tessellation is the triangles' volume; the band bound
+// added for the deflection covers the way to the exact solid's (analytic caps of a ball).
+TEST(CadVolume, TheTessellationBandCoversTheExactSolidsVolume) {
+  constexpr double kPi = 3.14159265358979323846;
+  const double r = 10.0;
+  auto ball = cad_part(sphere(Vec3::Zero(), r));
+  for (double h : {-30.0, -5.0, 0.0, 9.8}) {  // the box z >= h cuts a cap of height r - h (all of it below -r)
+    const double cap = r - std::max(h, -r);
+    const double exact = kPi * cap * cap * (3.0 * r - cap) / 3.0;
+    const TriangleMesh box = testing::box_mesh(Vec3(-50, -50, h), Vec3(50, 50, 50));
+    const double on_triangles = exact_interference_volume(*ball->mesh, {}, box, {}).value().volume_mm3;
+    const Aabb region{ball->mesh->bounds().min.cwiseMax(box.bounds().min), ball->mesh->bounds().max.cwiseMin(box.bounds().max)};
+    const double band = tessellation_band_volume(*ball->mesh, {}, kDeflectionMm, region);
+    SCOPED_TRACE("h " + std::to_string(h) + ": triangles " + std::to_string(on_triangles) + " exact " + std::to_string(exact) +
+                 " band " + std::to_string(band));
+    EXPECT_GT(std::fabs(on_triangles - exact), 0.0);
+    EXPECT_LE(std::fabs(on_triangles - exact), band);
+  }
 }
 
 // A depth found on the tessellations frees the tessellations; moved by what check_depth_on_brep

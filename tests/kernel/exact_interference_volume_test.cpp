@@ -133,15 +133,40 @@ TEST(ExactInterferenceVolume, AMeshCrossingItselfWhereThePartsMeetIsRefusedByNam
   auto got = exact_interference_volume(crossing, {}, probe, {});
   ASSERT_FALSE(got.ok());
   EXPECT_EQ(got.error().code, ErrorCode::kFailedPrecondition);
-  EXPECT_NE(got.error().message.find("intersects itself"), std::string::npos) << got.error().to_string();
-  // The volume query still answers, with the ray cast's figure and the reason it was not exact.
+  EXPECT_EQ(got.error().field, "a");
+  EXPECT_NE(got.error().message.find("does not bound a volume"), std::string::npos) << got.error().to_string();
+  // The ray cast's parity would count the shells' shared region as outside: no figure at all.
   const auto a = MeshBvh::build(testing::share(crossing)).value();
   const auto p = MeshBvh::build(testing::share(probe)).value();
-  const VolumeEstimate v2 = interference_volume(*a, {}, *p, {}, 64).value();
-  if (v2.error_bound_mm3 > 0.01 * v2.volume_mm3) {
-    EXPECT_EQ(v2.method, VolumeMethod::kRayCast);
-    EXPECT_FALSE(v2.exact_not_used.empty());
-  }
+  auto refused = interference_volume(*p, {}, *a, {}, 64);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().field, "b");
+}
+
+// Shells nested with the same orientation (a box inside a box, both outward), and a body wound
+// inward beside an outward one, do not bound a volume either; a cavity wound inward does.
+TEST(ExactInterferenceVolume, NestedShellsMustAlternateTheirOrientation) {
+  auto join = [](const TriangleMesh& outer, const TriangleMesh& inner, bool flip_inner) {
+    std::vector<Vec3> v = outer.vertices();
+    v.insert(v.end(), inner.vertices().begin(), inner.vertices().end());
+    std::vector<TriangleMesh::Face> f = outer.faces();
+    const auto n = static_cast<std::uint32_t>(outer.vertices().size());
+    for (auto face : inner.faces()) {
+      if (flip_inner) std::swap(face[1], face[2]);
+      f.push_back({face[0] + n, face[1] + n, face[2] + n});
+    }
+    return TriangleMesh::create(v, f).value();
+  };
+  const TriangleMesh outer = testing::box_mesh(Vec3(0, 0, 0), Vec3(20, 20, 20));
+  const TriangleMesh inner = testing::box_mesh(Vec3(5, 5, 5), Vec3(15, 15, 15));
+  const TriangleMesh probe = testing::box_mesh(Vec3(10, 10, 10), Vec3(20, 20, 20));
+  EXPECT_FALSE(bounds_a_volume(join(outer, inner, false), "a").value());
+  const TriangleMesh hollow = join(outer, inner, true);
+  ASSERT_TRUE(bounds_a_volume(hollow, "a").value());
+  // The hollow box against [10, 20]^3: 1000 less the cavity's 125.
+  EXPECT_EQ(exact_interference_volume(hollow, {}, probe, {}).value().volume_mm3, 875.0);
+  const TriangleMesh beside = testing::box_mesh(Vec3(30, 0, 0), Vec3(40, 10, 10));
+  EXPECT_FALSE(bounds_a_volume(join(testing::box_mesh(Vec3(0, 0, 0), Vec3(10, 10, 10)), beside, true), "a").value());
 }
 
 // The overlaps the ray cast's grid could not resolve (a corner of 1.5e-6 mm^3, a 45-degree edge
@@ -160,6 +185,31 @@ TEST(ExactInterferenceVolume, TheRayCastFallsBackToItWhereTheGridCannotResolveTh
   const VolumeEstimate vf = interference_volume(*a, far, *corner, far, 64).value();
   EXPECT_EQ(vf.method, VolumeMethod::kExactCorefinement);
   EXPECT_NEAR(vf.volume_mm3, depth * depth * depth, 1e-15 * depth * depth * depth);
+}
+
+}  // namespace
+}  // namespace gk
+
+namespace gk {
+namespace {
+
+// Corner and edge overlaps far thinner than the coordinates' magnitude (2^-20 mm at 10 mm): the
+// figure, by whichever method, lies within its bound of the exact e^3 or e^2 * 10.
+TEST(InterferenceVolume, TheBoundHoldsForOverlapsFarThinnerThanTheCoordinates) {
+  const auto cube = MeshBvh::build(testing::share(testing::box_mesh(Vec3(0, 0, 0), Vec3(10, 10, 10)))).value();
+  for (int k : {20, 23, 26}) {
+    const double e = std::ldexp(1.0, -k);
+    struct Case {
+      Vec3 t;
+      double exact;
+    };
+    const Case cases[] = {{Vec3(10 - e, 10 - e, 10 - e), e * e * e}, {Vec3(10 - e, 10 - e, 0), e * e * 10}, {Vec3(10 - e, 10 - e, 3), e * e * 7}};
+    for (const Case& c : cases) {
+      const VolumeEstimate v = interference_volume(*cube, {}, *cube, RigidTransform::from_translation(c.t), 256).value();
+      SCOPED_TRACE("k " + std::to_string(k) + " t " + std::to_string(c.t.z()) + " method " + std::to_string(static_cast<int>(v.method)));
+      EXPECT_LE(std::fabs(v.volume_mm3 - c.exact), v.error_bound_mm3) << v.volume_mm3 << " vs " << c.exact << " bound " << v.error_bound_mm3;
+    }
+  }
 }
 
 }  // namespace

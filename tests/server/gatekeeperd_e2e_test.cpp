@@ -305,7 +305,7 @@ TEST(GatekeeperdE2E, ClearanceQueryMatchesTheKernelAndRefusesOverload) {
   grpc::ClientContext sctx;
   ASSERT_TRUE(stub->ClearanceQuery(&sctx, overlap, &deep).ok());
   EXPECT_EQ(deep.verdict(), pb::COLLISION);
-  EXPECT_EQ(deep.interference_volume_mm3(), 0.0);
+  EXPECT_EQ(deep.interference_volume_mm3(), -1.0);  // requested, not measured
   EXPECT_NE(deep.not_computed().find("volume"), std::string::npos) << deep.not_computed();
   // Two CAD parts: the distance is refined on the exact faces and matches BRepExtrema on the
   // whole shapes to 1e-6 mm.
