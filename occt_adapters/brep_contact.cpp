@@ -1,6 +1,7 @@
 #include "occt_adapters/brep_contact.h"
 
 #include "kernel/tolerances.h"
+#include "kernel/triangle_distance.h"
 
 #include "occt_adapters/face_pair_descent.h"
 #include "occt_adapters/occt_errors.h"
@@ -15,6 +16,7 @@
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_MakeVertex.hxx>
 #include <Bnd_Box.hxx>
+#include <gp_Pln.hxx>
 #include <BRepBuilderAPI_MakePolygon.hxx>
 #include <BRepClass3d_SolidClassifier.hxx>
 #include <BRepExtrema_DistShapeShape.hxx>
@@ -283,6 +285,47 @@ std::vector<gp_Pnt> points_in_face(const TopoDS_Face& face) {
   return out;
 }
 
+// For each triangle (local frame after subtracting frame_origin), on either side of its plane: the
+// point of the shape farthest beyond the plane, found as the shape's nearest point to a large
+// parallel plane face far out on that side; if it lies beyond by more than tolerance_mm, its foot
+// on the plane, clamped into the triangle, is classified. True with that point when it lies inside
+// a solid of the shape beyond tolerance_mm: a point of the triangles inside, proven by the classifier.
+bool foot_of_extreme_point_inside(const TopoDS_Shape& shape, const std::vector<Triangle>& triangles, const Vec3& frame_origin,
+                                  double tolerance_mm, gp_Pnt& found) {
+  constexpr std::size_t kMaxTriangles = 64;
+  Bnd_Box box;
+  BRepBndLib::Add(shape, box);
+  const double reach = std::sqrt(box.SquareExtent()) + 1.0;
+  for (std::size_t t = 0; t < triangles.size() && t < kMaxTriangles; ++t) {
+    const Vec3 p0 = triangles[t][0] - frame_origin, p1 = triangles[t][1] - frame_origin, p2 = triangles[t][2] - frame_origin;
+    Vec3 n = (p1 - p0).cross(p2 - p0);
+    if (!(n.norm() > 0.0)) continue;
+    n.normalize();
+    for (double side : {1.0, -1.0}) {
+      const Vec3 far_origin = p0 + side * (2.0 * reach) * n;
+      const gp_Pln far_plane(gp_Pnt(far_origin.x(), far_origin.y(), far_origin.z()), gp_Dir(n.x(), n.y(), n.z()));
+      BRepBuilderAPI_MakeFace far_face(far_plane, -4.0 * reach, 4.0 * reach, -4.0 * reach, 4.0 * reach);
+      if (!far_face.IsDone()) continue;
+      BRepExtrema_DistShapeShape dist(shape, far_face.Face());
+      if (!dist.IsDone() || dist.NbSolution() < 1) continue;
+      const Vec3 e = vec(dist.PointOnShape1(1));
+      const double beyond = side * n.dot(e - p0);
+      if (beyond <= tolerance_mm) continue;
+      const Vec3 foot = closest_point_on_triangle(e - n.dot(e - p0) * n, Triangle{p0, p1, p2});
+      BRepClass3d_SolidClassifier classifier;
+      for (TopExp_Explorer s(shape, TopAbs_SOLID); s.More(); s.Next()) {
+        classifier.Load(s.Current());
+        classifier.Perform(gp_Pnt(foot.x(), foot.y(), foot.z()), tolerance_mm);
+        if (classifier.State() == TopAbs_IN) {
+          found = gp_Pnt(foot.x(), foot.y(), foot.z());
+          return true;
+        }
+      }
+    }
+  }
+  return false;
+}
+
 }  // namespace
 
 bool SharedVolume::crossing() const {
@@ -514,6 +557,15 @@ Result<TrianglesAgainstSolid> triangles_against_solid(const Shape& shape, const 
         out.point_inside = vec(p) + frame_origin;
         return;
       }
+    }
+    // Both can lose a shallow cap of a torus cut by a plane (the review found 0.049 mm missed): the
+    // solid's extreme point beyond each triangle's plane (the nearest point to a far parallel
+    // plane), dropped onto the triangle, is classified as well.
+    gp_Pnt cap_point;
+    if (foot_of_extreme_point_inside(placed.value().impl().shape, triangles, frame_origin, tolerance_mm, cap_point)) {
+      out.relation = TrianglesRelation::kEntering;
+      out.point_inside = vec(cap_point) + frame_origin;
+      return;
     }
     out.relation = undecided ? TrianglesRelation::kUndecided : TrianglesRelation::kNotEntering;
   });

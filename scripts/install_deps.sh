@@ -6,6 +6,8 @@ set -euo pipefail
 PACKAGES=(
   # toolchain
   build-essential cmake ninja-build pkg-config git ca-certificates
+  # compiler outputs cached across the three builds of the test command and across clones
+  ccache
   # fuzz targets (scripts/fuzz.sh): clang with libFuzzer and its sanitizer runtimes
   clang libclang-rt-14-dev
   # geometry: OpenCASCADE 7.6.3 and Eigen

@@ -242,7 +242,20 @@ grpc::Status answer_clearance(const pb::ClearanceQueryRequest& request, PartRegi
     if (!why.empty()) response->set_depth_mm(-1.0);  // no depth certified: never a 0 that reads as "free"
     not_computed += why;
   }
-  if (interpenetrating && request.compute_volume()) not_computed += add_volume(a, b, v.point_a, stop, response);
+  // Touching parts may still share a sliver (an overlap whose crossing segments are all shorter
+  // than the point-contact tolerance): measured, not assumed 0. Apart (CLEAR), they share nothing.
+  if (request.compute_volume()) {
+    if (interpenetrating || v.verdict == Verdict::kTouching) {
+      not_computed += add_volume(a, b, v.point_a, stop, response);
+    } else if (v.verdict == Verdict::kClear) {
+      response->set_interference_volume_mm3(0.0);
+      response->set_volume_error_bound_mm3(0.0);
+      response->set_volume_method("apart: nothing shared");
+    } else {
+      response->set_interference_volume_mm3(-1.0);
+      not_computed += "volume: the verdict is INCONCLUSIVE; ";
+    }
+  }
   // The caller gave up (deadline, cancel): the work stopped where it was, and nobody reads this.
   if (stop.stop_requested()) return {grpc::StatusCode::DEADLINE_EXCEEDED, "stopped: the deadline passed or the call was cancelled"};
   response->set_not_computed(not_computed);

@@ -361,6 +361,18 @@ TEST(CadPairVerdict, AFlatFaceCuttingATorusAtItsSeamsCollides) {
     ASSERT_TRUE(v.ok());
     expect_truth(v.value(), gap, "torus seam, gap " + std::to_string(gap));
   }
+  // The second review: away from the seam (turned about the torus's axis) both the Boolean and the
+  // section lost caps near 0.049 mm deep; the foot of the solid's extreme point beyond the face finds them.
+  for (double azimuth_deg : {15.0, 45.0, 90.0, 135.0, 270.0, 345.0}) {
+    for (double gap : {-0.0505, -0.049, -0.0485, -0.01}) {
+      const RigidTransform turn = RigidTransform::from_axis_angle(Vec3::UnitZ(), azimuth_deg * kDegree);
+      RigidTransform pose = turn;
+      pose.translation = turn.rotation * Vec3(25.0 + gap, 0, 0);
+      auto v = decide_pair({torus.get(), {}}, {slab.get(), pose});
+      ASSERT_TRUE(v.ok());
+      expect_truth(v.value(), gap, "torus at azimuth " + std::to_string(azimuth_deg) + ", gap " + std::to_string(gap));
+    }
+  }
 }
 
 // A shared volume measured on a CAD part's tessellation is the triangles' volume; the band bound
