@@ -14,7 +14,6 @@ Result<CheckedDepth> check_depth_on_brep(const PosedPart& a, const PosedPart& b,
     out.checked = true;
     return out;
   }
-  if (!a.part->is_cad() || !b.part->is_cad()) return out;
   if (!direction.allFinite() || !(direction.norm() > 0.0)) return invalid_argument("direction", "must be a non-zero vector");
   const Vec3 u = direction.normalized();
   // Small steps first: the triangles' depth is usually short of the solids' by much less than the

@@ -12,13 +12,16 @@ namespace gk::engine {
 
 struct CheckedDepth {
   double depth_mm = 0.0;  // B moved by this along the direction is clear of A on the exact faces
-  bool checked = false;   // false: a CAD part against a mesh (no Boolean there): depth as found
+  bool checked = false;   // true once B moved by depth_mm was found clear (always, on success)
   double added_mm = 0.0;  // what was added to the triangles' depth to free the exact solids
 };
 
 // Tries the depth, then the depth plus growing steps (the contact tolerance up to 8 times the
 // pair's deflection window, the sum of both deflections); the first at which the exact-face
-// verdict is CLEAR is reported. An error when none is (the depth is then not certified).
+// verdict is CLEAR is reported — for two CAD parts and for a CAD part against a mesh alike (its
+// exact faces against the mesh's triangles: a mesh's tessellation of a sphere lies inside the
+// sphere, so freeing it frees the triangles, not the solid). An error when none is (the depth is
+// then not certified).
 // Asks `stop` between trials.
 Result<CheckedDepth> check_depth_on_brep(const PosedPart& a, const PosedPart& b, const Vec3& direction, double depth_mm,
                                          const StopToken& stop = {});

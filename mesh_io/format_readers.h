@@ -14,7 +14,8 @@
 
 namespace gk::mesh_io {
 
-// A mesh as read: vertices and triangles (polygons fanned), indices checked against the vertices.
+// A mesh as read: vertices and triangles (larger polygons cut into triangles that cover them as
+// written: mesh_io/polygon_triangulation), indices checked against the vertices.
 struct RawMesh {
   std::vector<Vec3> vertices;
   std::vector<TriangleMesh::Face> faces;

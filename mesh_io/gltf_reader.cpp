@@ -25,7 +25,10 @@ constexpr std::uint32_t kGlbMagic = 0x46546C67;  // "glTF"
 constexpr std::uint32_t kChunkJson = 0x4E4F534A;
 constexpr std::uint32_t kChunkBin = 0x004E4942;
 constexpr int kMaxNodeDepth = 256;                 // deeper node trees are malformed (or cyclic)
-constexpr std::size_t kMaxTriangles = 200000000;  // instanced triangles, at most
+// Instanced triangles (and vertices), at most: a small file instancing a mesh many times could otherwise ask for
+// more memory than the machine has (the reader holds about 130 bytes a triangle: 20 million
+// take about 2.6 GB, and about 40 s here).
+constexpr std::size_t kMaxTriangles = 20000000;
 
 std::uint32_t read_u32(std::string_view bytes, std::size_t at) {
   std::uint32_t v = 0;
@@ -243,6 +246,12 @@ class GltfReader {
     const std::string where = "nodes[" + std::to_string(index) + "]";
     if (depth > kMaxNodeDepth) return invalid_argument(where, "nodes nested deeper than 256 (a cycle?)");
     if (!doc_.contains("nodes") || index >= doc_["nodes"].size()) return invalid_argument(where, "no such node");
+    // glTF's nodes form disjoint trees: a node reached twice (two parents, or a root that is also
+    // a child) would be walked once per path, and 42 nodes that each name the next twice make
+    // 2^41 paths.
+    if (reached_.size() != doc_["nodes"].size()) reached_.assign(doc_["nodes"].size(), 0);
+    if (reached_[index]) return invalid_argument(where, "reached twice: glTF nodes form trees (one parent at most)");
+    reached_[index] = 1;
     const Json& node = doc_["nodes"][index];
     auto local = local_transform(node, where);
     if (!local.ok()) return local.error();
@@ -293,6 +302,12 @@ class GltfReader {
       for (double i : idx)
         if (i >= static_cast<double>(vertex_count))
           return invalid_argument(pwhere + ".indices", "index outside the " + std::to_string(vertex_count) + " positions");
+      // Both caps checked before anything is copied: primitives sharing one large accessor copy its
+      // positions once each, and one strip or fan of small indices makes a triangle per index.
+      const std::size_t triangles = mode == 4 ? idx.size() / 3 : (idx.size() >= 3 ? idx.size() - 2 : 0);
+      if (out_.vertices.size() + vertex_count > kMaxTriangles)
+        return invalid_argument(pwhere, "more than 20 million vertices instanced");
+      if (out_.faces.size() + triangles > kMaxTriangles) return invalid_argument(pwhere, "more than 20 million triangles instanced");
       const auto base = static_cast<std::uint32_t>(out_.vertices.size());
       const std::vector<double>& pos = positions.value();
       for (std::size_t v = 0; v < vertex_count; ++v) {
@@ -312,12 +327,13 @@ class GltfReader {
       } else {  // fan
         for (std::size_t k = 1; k + 1 < idx.size(); ++k) add(idx[0], idx[k], idx[k + 1]);
       }
-      if (out_.faces.size() > kMaxTriangles) return invalid_argument(where, "more than 200 million triangles instanced");
+      if (out_.faces.size() > kMaxTriangles) return invalid_argument(where, "more than 20 million triangles instanced");
     }
     return true;
   }
 
   Json doc_;
+  std::vector<char> reached_;  // nodes visited so far
   std::string bin_;
   std::vector<std::string> buffers_;
   RawMesh out_;

@@ -2,9 +2,10 @@
 // back from the last vertex); every other statement (normals, texture coordinates, groups,
 // materials, mtllib) carries no geometry and is skipped without opening anything.
 #include "mesh_io/format_readers.h"
+#include "mesh_io/polygon_triangulation.h"
 #include "mesh_io/text_scanner.h"
 
-#include <array>
+#include <cstdint>
 
 namespace gk::mesh_io {
 
@@ -13,9 +14,9 @@ Result<RawMesh> read_obj(std::string_view bytes) {
   TextScanner scanner(bytes);
   std::string_view line;
   std::vector<long long> polygon;
-  // Faces are kept with their 1-based indices and checked once every vertex is known.
-  std::vector<std::size_t> face_line;
-  std::vector<std::array<long long, 3>> pending;
+  // Faces are kept with their 1-based indices (one flat list) and checked once every vertex is known.
+  std::vector<long long> indices;
+  std::vector<std::size_t> face_start, face_line;
   while (scanner.next_line(line)) {
     const std::string_view keyword = next_word(line);
     if (keyword == "v") {
@@ -36,22 +37,25 @@ Result<RawMesh> read_obj(std::string_view bytes) {
       }
       if (polygon.size() < 3) return line_error(scanner.line_number(), "a face needs at least three vertices");
       if (polygon.size() > 65536) return line_error(scanner.line_number(), "a face of more than 65,536 vertices");
-      for (std::size_t k = 1; k + 1 < polygon.size(); ++k) {
-        pending.push_back({polygon[0], polygon[k], polygon[k + 1]});
-        face_line.push_back(scanner.line_number());
-      }
+      face_start.push_back(indices.size());
+      face_line.push_back(scanner.line_number());
+      indices.insert(indices.end(), polygon.begin(), polygon.end());
     }
   }
+  face_start.push_back(indices.size());
   const auto count = static_cast<long long>(mesh.vertices.size());
-  for (std::size_t f = 0; f < pending.size(); ++f) {
-    TriangleMesh::Face face;
-    for (int k = 0; k < 3; ++k) {
-      if (pending[f][k] < 1 || pending[f][k] > count)
-        return line_error(face_line[f], "face index " + std::to_string(pending[f][k]) + " is outside the " +
+  TriangulationBudget budget;
+  std::vector<std::uint32_t> face;
+  for (std::size_t f = 0; f + 1 < face_start.size(); ++f) {
+    face.clear();
+    for (std::size_t k = face_start[f]; k < face_start[f + 1]; ++k) {
+      if (indices[k] < 1 || indices[k] > count)
+        return line_error(face_line[f], "face index " + std::to_string(indices[k]) + " is outside the " +
                                             std::to_string(count) + " vertices");
-      face[k] = static_cast<std::uint32_t>(pending[f][k] - 1);
+      face.push_back(static_cast<std::uint32_t>(indices[k] - 1));
     }
-    mesh.faces.push_back(face);
+    auto cut = append_polygon_triangles(mesh.vertices, face, mesh.faces, budget);
+    if (!cut.ok()) return line_error(face_line[f], cut.error().message);
   }
   return mesh;
 }

@@ -2,6 +2,7 @@
 // vertices (their first three numbers; colours or normals after them are skipped) and the faces
 // ("n i1 ... in", 0-based). The counts must match what follows.
 #include "mesh_io/format_readers.h"
+#include "mesh_io/polygon_triangulation.h"
 #include "mesh_io/text_scanner.h"
 
 namespace gk::mesh_io {
@@ -53,6 +54,7 @@ Result<RawMesh> read_off(std::string_view bytes) {
       if (!parse_double(next_word(line), c)) return line_error(scanner.line_number(), "a vertex needs three finite coordinates");
     mesh.vertices.emplace_back(xyz[0], xyz[1], xyz[2]);
   }
+  TriangulationBudget budget;
   for (long long f = 0; f < nf; ++f) {
     if (!next_content(scanner, line))
       return invalid_argument("faces", "declares " + std::to_string(nf) + " faces, gives " + std::to_string(f));
@@ -66,7 +68,8 @@ Result<RawMesh> read_off(std::string_view bytes) {
         return line_error(scanner.line_number(), "face index outside the " + std::to_string(nv) + " vertices");
       polygon.push_back(static_cast<std::uint32_t>(index));
     }
-    for (std::size_t k = 1; k + 1 < polygon.size(); ++k) mesh.faces.push_back({polygon[0], polygon[k], polygon[k + 1]});
+    auto cut = append_polygon_triangles(mesh.vertices, polygon, mesh.faces, budget);
+    if (!cut.ok()) return line_error(scanner.line_number(), cut.error().message);
   }
   return mesh;
 }

@@ -3,6 +3,7 @@
 // and the face element's index list are read; every other element or property is skipped by
 // its declared size.
 #include "mesh_io/format_readers.h"
+#include "mesh_io/polygon_triangulation.h"
 #include "mesh_io/text_scanner.h"
 
 #include <cstring>
@@ -146,6 +147,7 @@ Result<RawMesh> read_ply(std::string_view bytes) {
 
   RawMesh mesh;
   long long vertex_count = -1;
+  std::vector<std::pair<std::string, std::vector<std::uint32_t>>> polygons;  // faces of more than 3 vertices
   BinaryCursor binary(bytes.substr(scanner.offset()), format == "binary_big_endian");
   std::vector<double> values;
   std::vector<std::vector<double>> lists;
@@ -214,9 +216,18 @@ Result<RawMesh> read_ply(std::string_view bytes) {
                                                                            std::to_string(std::max(0LL, vertex_count)) + " vertices");
           polygon.push_back(static_cast<std::uint32_t>(d));
         }
-        for (std::size_t k = 1; k + 1 < polygon.size(); ++k) mesh.faces.push_back({polygon[0], polygon[k], polygon[k + 1]});
+        // Larger polygons are cut once every vertex is known (the vertices may follow the faces).
+        if (polygon.size() == 3) mesh.faces.push_back({polygon[0], polygon[1], polygon[2]});
+        else polygons.push_back({where + std::to_string(item) + "]", std::move(polygon)});
       }
     }
+  }
+  if (static_cast<long long>(mesh.vertices.size()) != std::max(0LL, vertex_count) && !polygons.empty())
+    return invalid_argument("element vertex", "fewer vertices than declared");
+  TriangulationBudget budget;
+  for (const auto& [name, polygon] : polygons) {
+    auto cut = append_polygon_triangles(mesh.vertices, polygon, mesh.faces, budget);
+    if (!cut.ok()) return invalid_argument(name, cut.error().message);
   }
   return mesh;
 }

@@ -7,6 +7,7 @@
 #include "occt_adapters/occt_errors.h"
 #include "occt_adapters/shape_builders.h"
 #include "occt_adapters/shape_impl.h"
+#include "occt_adapters/solid_volume.h"
 
 #include <BRepAdaptor_Curve.hxx>
 #include <BRepAlgoAPI_Common.hxx>
@@ -200,7 +201,7 @@ bool solids_near(const TopoDS_Shape& shape, const Bnd_Box& near, std::vector<Top
 // OCCT's Booleans assume each argument is free of self-interference, which an assembly of
 // overlapping solids is not (one common of the whole compounds called a shared 8000 mm^3 a touch),
 // so each side's overlapping solids are fused first. False when a Boolean failed.
-bool common_volume(const TopoDS_Shape& a, const TopoDS_Shape& b, SharedVolume& out) {
+bool common_volume(const TopoDS_Shape& a, const TopoDS_Shape& b, SharedVolume& out, bool bound_error = false) {
   out = SharedVolume{};
   Bnd_Box whole_a, whole_b;
   BRepBndLib::Add(a, whole_a);
@@ -217,15 +218,10 @@ bool common_volume(const TopoDS_Shape& a, const TopoDS_Shape& b, SharedVolume& o
       BRepAlgoAPI_Common common(sa, sb);
       if (!common.IsDone() || common.HasErrors()) return false;
       for (TopExp_Explorer e(common.Shape(), TopAbs_SOLID); e.More(); e.Next()) {
-        GProp_GProps props;
-        // With a requested precision OCCT integrates adaptively and returns its relative error estimate.
-        const double relative = BRepGProp::VolumeProperties(e.Current(), props, 1e-9);
-        const double volume = std::fabs(props.Mass());
-        out.volume_mm3 += volume;
-        out.error_estimate_mm3 += std::fabs(relative * volume);
-        GProp_GProps surface;
-        BRepGProp::SurfaceProperties(e.Current(), surface);
-        if (surface.Mass() > 0.0) out.thickness_mm = std::max(out.thickness_mm, 2.0 * volume / surface.Mass());
+        const SolidVolume measured = bound_error ? solid_volume_with_bound(e.Current()) : solid_volume(e.Current());
+        out.volume_mm3 += measured.volume_mm3;
+        out.error_bound_mm3 += measured.error_bound_mm3;
+        if (measured.area_mm2 > 0.0) out.thickness_mm = std::max(out.thickness_mm, 2.0 * measured.volume_mm3 / measured.area_mm2);
       }
       if (!out.crossing()) {
         gp_Pnt p;
@@ -395,7 +391,7 @@ Result<BrepContact> decide_brep_contact(const Shape& a, const RigidTransform& po
 }
 
 Result<SharedVolume> shared_volume(const Shape& a, const RigidTransform& pose_a, const Shape& b, const RigidTransform& pose_b,
-                                   const Vec3& frame_origin) {
+                                   const Vec3& frame_origin, bool bound_error) {
   auto placed = place_pair(a, pose_a, b, pose_b, frame_origin);
   if (!placed.ok()) return placed.error();
   const TopoDS_Shape& placed_a = placed.value().first.impl().shape;
@@ -403,7 +399,7 @@ Result<SharedVolume> shared_volume(const Shape& a, const RigidTransform& pose_a,
   SharedVolume out;
   bool failed = false;
   auto ran = guarded("shapes", "Boolean common", [&] {
-    failed = !common_volume(placed_a, placed_b, out);
+    failed = !common_volume(placed_a, placed_b, out, bound_error);
     if (out.surface_point_inside) out.point_inside += frame_origin;
   });
   if (!ran.ok()) return ran.error();

@@ -32,13 +32,13 @@ struct BrepContact {
   bool used_boolean = false;
 };
 
-// The volume two solids share (Boolean common, solid by solid) [mm^3], OCCT's estimate of its
-// integration error, and how thick the common is on average (the largest of its solids' 2 V / A).
+// The volume two solids share (Boolean common, solid by solid) [mm^3], a bound on its error
+// (checked against the common's fine tessellation), and how thick the common is on average (the largest of its solids' 2 V / A).
 // When that does not show a crossing, the boundaries' section is examined: a point of either
 // surface found inside the other solid (beyond the contact tolerance) where they cross.
 struct SharedVolume {
   double volume_mm3 = 0.0;
-  double error_estimate_mm3 = 0.0;
+  double error_bound_mm3 = 0.0;   // |true - volume_mm3| at most this (occt_adapters/solid_volume)
   double thickness_mm = 0.0;
   bool surface_point_inside = false;
   Vec3 point_inside = Vec3::Zero();  // that point, in the frame the shapes were placed in
@@ -54,9 +54,11 @@ Result<BrepContact> decide_brep_contact(const Shape& a, const RigidTransform& po
                                         const RigidTransform& pose_b, const Vec3& frame_origin,
                                         const std::vector<std::pair<int, int>>& face_pairs, double touch_mm);
 
-// The volume the two solids share at their poses (Boolean common in the local frame).
+// The volume the two solids share at their poses (Boolean common in the local frame). With
+// bound_error, error_bound_mm3 is a bound that holds (the common checked against its tessellation,
+// occt_adapters/solid_volume); without, only the crossing matters and it is infinity.
 Result<SharedVolume> shared_volume(const Shape& a, const RigidTransform& pose_a, const Shape& b, const RigidTransform& pose_b,
-                                   const Vec3& frame_origin);
+                                   const Vec3& frame_origin, bool bound_error = false);
 
 // A second search for the closest points, independent of BRepExtrema's face-pair extrema (which
 // can stop in a local minimum): the mesh witnesses projected onto the exact shapes, then projected

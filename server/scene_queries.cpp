@@ -255,7 +255,7 @@ void AuditJob::run(PartRegistry& parts, std::function<void(const AuditSnapshot&)
       if (v.result.verdict != Verdict::kCollision) {
         r.clash.depth_mm = -1.0;
         r.clash.depth_direction = Vec3::Zero();
-      } else if (options_.compute_depth && parts_of[c.a]->is_cad() && parts_of[c.b]->is_cad()) {
+      } else if (options_.compute_depth && (parts_of[c.a]->is_cad() || parts_of[c.b]->is_cad())) {
         // The triangles' depth frees the tessellations, not the solids: checked (and extended) on
         // the exact faces as ClearanceQuery does; along the centres' line when the triangles are free.
         const engine::PosedPart pa{parts_of[c.a].get(), objects[c.a].pose}, pb_{parts_of[c.b].get(), objects[c.b].pose};

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstring>
 #include <sstream>
 #include <string>
@@ -123,6 +124,28 @@ TEST(GltfReader, MalformedDocumentsAreErrorsNamingWhere) {
   std::string idx = document(R"([{"mesh":0}])", embedded());
   idx.replace(idx.find("\"count\":12"), 10, "\"count\":14");
   EXPECT_FALSE(read_mesh_bytes(idx, "gltf").ok());
+}
+
+// glTF nodes form trees. Found by a review: 42 nodes each naming the next twice as a child is a
+// 1 KB file with 2^41 paths through it, which kept the upload worker busy for good; the same
+// sharing instanced one triangle millions of times from 2 KB. A node reached twice is refused.
+TEST(GltfReader, NodesSharedBetweenParentsAreRefusedAtOnce) {
+  std::string nodes = "[";
+  for (int i = 0; i < 42; ++i) nodes += std::string(i ? "," : "") + "{\"mesh\":0,\"children\":[" + std::to_string(i + 1) + "," + std::to_string(i + 1) + "]}";
+  nodes += ",{\"mesh\":0}]";
+  const auto t0 = std::chrono::steady_clock::now();
+  auto dag = read_mesh_bytes(document(nodes, embedded()), "gltf");
+  ASSERT_FALSE(dag.ok());
+  EXPECT_NE(dag.error().to_string().find("reached twice"), std::string::npos) << dag.error().to_string();
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
+  // A cycle, and a root that is also another node's child.
+  EXPECT_FALSE(read_mesh_bytes(document(R"([{"mesh":0,"children":[1]},{"children":[0]}])", embedded()), "gltf").ok());
+  auto twice = read_mesh_bytes(document(R"([{"children":[1,1]},{"mesh":0}])", embedded()), "gltf");
+  EXPECT_FALSE(twice.ok());
+  // A proper tree still instances the mesh once per node.
+  auto tree = read_mesh_bytes(document(R"([{"children":[1,2]},{"mesh":0},{"mesh":0,"translation":[5,0,0]}])", embedded()), "gltf");
+  ASSERT_TRUE(tree.ok()) << tree.error().to_string();
+  EXPECT_EQ(tree.value().triangle_count(), 8u);
 }
 
 }  // namespace
