@@ -32,16 +32,25 @@ std::vector<ContactRegion> group_into_regions(const std::vector<ProximityPair>& 
     auto [ib, new_b] = first_with_b.emplace(pairs[i].triangle_b, i);
     if (!new_b) sets.join(i, ib->second);
   }
-  // Nearby witnesses, through a hash grid of cell merge_mm: neighbours are in adjacent cells.
+  // Nearby witnesses, through a hash grid whose cells are small enough (diagonal just under
+  // merge_mm) that all witnesses in one cell are joined at once; a cell is then joined to each
+  // neighbour within reach (two cells each way) by the first pair of witnesses found close enough.
+  // Linear in the pairs however densely they crowd (a part against its own copy puts 100,000
+  // witnesses in a few cells: comparing each with its neighbours took a minute).
   if (merge_mm > 0.0 && std::isfinite(merge_mm)) {
-    std::unordered_multimap<GridCell, std::size_t, GridCellHash> grid;
-    for (std::size_t i = 0; i < pairs.size(); ++i) grid.emplace(grid_cell_of(pairs[i].point_a, merge_mm), i);
-    for (std::size_t i = 0; i < pairs.size(); ++i) {
-      const GridCell c = grid_cell_of(pairs[i].point_a, merge_mm);
-      UniformGrid::for_each_cell({{c.x - 1, c.y - 1, c.z - 1}, {c.x + 1, c.y + 1, c.z + 1}}, [&](const GridCell& near) {
-        auto range = grid.equal_range(near);
-        for (auto it = range.first; it != range.second; ++it)
-          if ((pairs[it->second].point_a - pairs[i].point_a).norm() <= merge_mm) sets.join(i, it->second);
+    const double cell_mm = merge_mm / 1.7321;  // a little under merge_mm / sqrt(3)
+    std::unordered_map<GridCell, std::vector<std::size_t>, GridCellHash> cells;
+    for (std::size_t i = 0; i < pairs.size(); ++i) cells[grid_cell_of(pairs[i].point_a, cell_mm)].push_back(i);
+    for (const auto& [c, members] : cells)
+      for (std::size_t m = 1; m < members.size(); ++m) sets.join(members[m], members[0]);
+    for (const auto& [c, members] : cells) {
+      UniformGrid::for_each_cell({{c.x - 2, c.y - 2, c.z - 2}, {c.x + 2, c.y + 2, c.z + 2}}, [&](const GridCell& near) {
+        if (near == c) return;
+        auto other = cells.find(near);
+        if (other == cells.end() || sets.find(members[0]) == sets.find(other->second[0])) return;
+        for (std::size_t i : members)
+          for (std::size_t j : other->second)
+            if ((pairs[j].point_a - pairs[i].point_a).norm() <= merge_mm) return sets.join(i, j);
       });
     }
   }

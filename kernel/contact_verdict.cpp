@@ -112,6 +112,7 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
   CollisionRequest creq;
   creq.all_contacts = true;
   creq.max_contacts = options.max_contacts;
+  creq.stop = options.stop;
   auto collided = collide(a, pose_a, b, pose_b, creq);
   if (!collided.ok()) return collided.error();
   if (oriented && collided.value().truncated) {
@@ -183,6 +184,7 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
   }
 
   DistanceRequest dreq;
+  dreq.stop = options.stop;
   if (options.distance_upper_bound_mm > options.contact_tolerance_mm) dreq.upper_bound_mm = options.distance_upper_bound_mm;
   auto measured = distance(a, pose_a, b, pose_b, dreq);
   if (!measured.ok()) return measured.error();

@@ -55,6 +55,8 @@ struct VerdictOptions {
   // pruned there, and a pair at least this far apart comes back CLEAR with distance_mm set to the
   // bound and distance_is_lower_bound. [mm]
   double distance_upper_bound_mm = std::numeric_limits<double>::infinity();
+  // A caller that gave up (deadline, cancel) ends the queries (kStopped); not owned.
+  const StopToken* stop = nullptr;
 };
 
 struct VerdictResult {

@@ -60,7 +60,8 @@ Result<CollisionResult> collide(const MeshBvh& a, const RigidTransform& pose_a, 
   stack[top++] = {0, 0};
   while (top > 0) {
     const NodePair p = stack[--top];
-    ++result.stats.node_pairs_tested;
+    if ((result.stats.node_pairs_tested++ & kStopCheckMask) == 0 && request.stop && request.stop->stop_requested())
+      return stopped("the collision query");
     if (!frame.nodes_overlap(p.a, p.b)) continue;
     const bool leaf_a = frame.is_leaf_a(p.a), leaf_b = frame.is_leaf_b(p.b);
     if (leaf_a && leaf_b) {

@@ -5,6 +5,7 @@
 #include "kernel/mesh_pair_frame.h"
 #include "kernel/rigid_transform.h"
 #include "kernel/status.h"
+#include "kernel/stop_token.h"
 
 #include <cstdint>
 #include <limits>
@@ -15,6 +16,8 @@ namespace gk {
 struct CollisionRequest {
   bool all_contacts = false;  // false: stop at the first intersecting pair
   std::size_t max_contacts = std::numeric_limits<std::size_t>::max();
+  // Asked every few thousand node pairs: a caller that gave up ends the traversal (kStopped).
+  const StopToken* stop = nullptr;
 };
 
 // One intersecting triangle pair, in world coordinates.

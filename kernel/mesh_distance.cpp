@@ -40,11 +40,13 @@ Result<DistanceResult> distance(const MeshBvh& a, const RigidTransform& pose_a, 
   queue.clear();
   const auto farther = [](const BoundedPair& x, const BoundedPair& y) { return x.lower_bound > y.lower_bound; };
   queue.push_back({0, 0, frame.nodes_lower_bound(0, 0)});
+  std::uint64_t popped = 0;
   ++result.stats.node_pairs_tested;
   while (!queue.empty()) {
     std::pop_heap(queue.begin(), queue.end(), farther);
     const BoundedPair p = queue.back();
     queue.pop_back();
+    if ((popped++ & kStopCheckMask) == 0 && request.stop && request.stop->stop_requested()) return stopped("the distance query");
     if (p.lower_bound >= best) break;  // every pair left is at least this far: done
     const bool leaf_a = frame.is_leaf_a(p.a), leaf_b = frame.is_leaf_b(p.b);
     if (leaf_a && leaf_b) {
@@ -101,7 +103,8 @@ Result<DistanceResult> distance(const MeshBvh& a, const RigidTransform& pose_a, 
 }
 
 Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
-                                     const RigidTransform& pose_b, double delta_mm, std::size_t max_pairs) {
+                                     const RigidTransform& pose_b, double delta_mm, std::size_t max_pairs,
+                                     const StopToken& stop) {
   if (!(delta_mm >= 0.0) || !std::isfinite(delta_mm))
     return invalid_argument("delta_mm", "must be a finite, non-negative distance");
   auto made = MeshPairFrame::make(a, pose_a, b, pose_b);
@@ -114,7 +117,7 @@ Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pos
   stack[top++] = {0, 0};
   while (top > 0 && !result.truncated) {
     const auto [na, nb] = stack[--top];
-    ++result.stats.node_pairs_tested;
+    if ((result.stats.node_pairs_tested++ & kStopCheckMask) == 0 && stop.stop_requested()) return stopped("the pairs within the gap");
     if (frame.pair_lower_bound(na, nb) > delta_mm) continue;
     const bool leaf_a = frame.is_leaf_a(na), leaf_b = frame.is_leaf_b(nb);
     if (leaf_a && leaf_b) {

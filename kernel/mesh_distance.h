@@ -6,6 +6,7 @@
 #include "kernel/mesh_pair_frame.h"
 #include "kernel/rigid_transform.h"
 #include "kernel/status.h"
+#include "kernel/stop_token.h"
 
 #include <cstdint>
 #include <limits>
@@ -19,6 +20,8 @@ struct DistanceRequest {
   double upper_bound_mm = std::numeric_limits<double>::infinity();
   // Stop at the first pair found closer than this: answers "is it closer than delta?". [mm]
   double stop_below_mm = -1.0;
+  // Asked every few thousand node pairs: a caller that gave up ends the traversal (kStopped).
+  const StopToken* stop = nullptr;
 };
 
 struct DistanceResult {
@@ -53,6 +56,7 @@ struct ProximityResult {
 // max_pairs of them.
 Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
                                      const RigidTransform& pose_b, double delta_mm,
-                                     std::size_t max_pairs = std::numeric_limits<std::size_t>::max());
+                                     std::size_t max_pairs = std::numeric_limits<std::size_t>::max(),
+                                     const StopToken& stop = {});
 
 }  // namespace gk

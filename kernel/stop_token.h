@@ -8,6 +8,11 @@
 
 namespace gk {
 
+// Traversals ask a StopToken at their first node pair and then once every kStopCheckMask + 1 of
+// them (well under a millisecond of work): often enough to stop at once, rarely enough to cost
+// nothing measurable.
+inline constexpr unsigned long long kStopCheckMask = 4095;
+
 class StopToken {
  public:
   StopToken() = default;  // never asks to stop

@@ -122,10 +122,7 @@ std::string add_depth(const PosedSide& a, const PosedSide& b, const Vec3& along,
   if (!checked.ok()) return "depth: " + checked.error().message + "; ";
   if (engine::deflection_window(pa, pb_) > 0.0) {
     exact = false;  // found on a tessellation, not on the parts
-    if (!checked.value().checked)
-      method += " (on the tessellation: a CAD part against a mesh is not checked on the exact faces)";
-    else
-      method += "; checked clear on the exact faces" +
+    method += "; checked clear on the exact faces" +
                 (checked.value().added_mm > 0.0 ? " after adding " + engine::number_text(checked.value().added_mm) + " mm" : std::string());
   }
   to_proto(direction, response->mutable_depth_direction());
@@ -146,7 +143,7 @@ std::string add_volume(const PosedSide& a, const PosedSide& b, const Vec3& near_
   std::string why_not_brep;
   if (a.is_cad() && b.is_cad()) {
     // In a frame local to the overlap: OCCT's Booleans lose overlaps at factory coordinates.
-    auto exact = occt::shared_volume(a.part->shape, a.pose, b.part->shape, b.pose, near_point);
+    auto exact = occt::shared_volume(a.part->shape, a.pose, b.part->shape, b.pose, near_point, /*bound_error=*/true);
     if (exact.ok() && exact.value().volume_mm3 <= tolerances::kBrepOverlapVolumeMm3) {
       // The verdict found them crossing, but the common holds (almost) nothing: a lens too small
       // for OCCT's Boolean to build. No figure rather than a 0 that reads as exact.
@@ -156,7 +153,7 @@ std::string add_volume(const PosedSide& a, const PosedSide& b, const Vec3& near_
     }
     if (exact.ok()) {
       response->set_interference_volume_mm3(exact.value().volume_mm3);
-      response->set_volume_error_bound_mm3(exact.value().error_estimate_mm3);
+      response->set_volume_error_bound_mm3(exact.value().error_bound_mm3);
       response->set_volume_cell_mm(0.0);
       response->set_volume_method("brep boolean common");
       return "";
@@ -192,8 +189,9 @@ std::string add_volume(const PosedSide& a, const PosedSide& b, const Vec3& near_
 grpc::Status answer_clearance(const pb::ClearanceQueryRequest& request, PartRegistry& parts, SceneStore& scenes,
                               const StopToken& stop, pb::ClearanceQueryResponse* response) {
   const auto t0 = Clock::now();
-  if (!std::isfinite(request.safety_gap_mm()) || request.safety_gap_mm() < 0.0)
-    return {grpc::StatusCode::INVALID_ARGUMENT, "safety_gap_mm: must be a finite, non-negative distance"};
+  if (!std::isfinite(request.safety_gap_mm()) || request.safety_gap_mm() < 0.0 ||
+      request.safety_gap_mm() > tolerances::kMaxCoordinateMm)
+    return {grpc::StatusCode::INVALID_ARGUMENT, "safety_gap_mm: must be a distance from 0 to 1e7 mm"};
   if (!std::isfinite(request.region_merge_mm()) || request.region_merge_mm() < 0.0)
     return {grpc::StatusCode::INVALID_ARGUMENT, "region_merge_mm: must be a finite, non-negative distance"};
   auto ra = resolve(request.a(), "a", parts, scenes);
@@ -205,6 +203,7 @@ grpc::Status answer_clearance(const pb::ClearanceQueryRequest& request, PartRegi
   engine::PairVerdictOptions options;
   options.clearance_mm = request.safety_gap_mm();
   options.measure_on_brep = true;
+  options.mesh.stop = &stop;
   auto decided = engine::decide_pair({a.part.get(), a.pose}, {b.part.get(), b.pose}, options);
   if (!decided.ok()) return to_status(decided.error());
   const engine::PairVerdict& pv = decided.value();
@@ -226,7 +225,7 @@ grpc::Status answer_clearance(const pb::ClearanceQueryRequest& request, PartRegi
   response->set_refined_on_brep(pv.decided_on_brep);
   response->set_exact_faces_us(1000.0 * pv.brep_ms);
   response->set_error_bound_mm(pv.error_bound_mm);
-  auto near = pairs_within(*a.part->bvh, a.pose, *b.part->bvh, b.pose, request.safety_gap_mm(), kMaxReportedPairs);
+  auto near = pairs_within(*a.part->bvh, a.pose, *b.part->bvh, b.pose, request.safety_gap_mm(), kMaxReportedPairs, stop);
   if (!near.ok()) return to_status(near.error());
   response->set_pairs_within_gap(static_cast<std::uint32_t>(near.value().pairs.size()));
   response->set_pairs_truncated(near.value().truncated);

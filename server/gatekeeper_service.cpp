@@ -59,6 +59,7 @@ class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> 
     if (!upload_) {
       if (!chunk_.has_header()) return fail(invalid_argument("header", "the first message must carry the header"));
       const pb::UploadHeader& h = chunk_.header();
+      if (auto bad = check_label(h.name(), "header.name"); !bad.ok()) return fail(bad.error());
       auto begun = service_.parts().store().begin(h.name(), h.format(), h.size_bytes(), h.sha256());
       if (!begun.ok()) return fail(begun.error());
       upload_ = std::move(begun.value());
@@ -137,6 +138,7 @@ GatekeeperService::GatekeeperService(MachineRegistry& machines, PartRegistry& pa
       validation_pool_(options.validation_workers, static_cast<std::size_t>(options.max_validations_in_flight)),
       part_validation_pool_(options.part_validation_workers, static_cast<std::size_t>(options.max_validations_in_flight)),
       scene_pool_(options.scene_workers, options.max_queued),
+      record_pool_(options.record_workers, options.max_queued),
       pool_(options.workers, options.max_queued),
       upload_pool_(options.upload_workers, options.max_queued),
       audit_pool_(options.audit_jobs, options.audit_queue),
@@ -365,12 +367,13 @@ grpc::ServerUnaryReactor* GatekeeperService::SetMachineState(grpc::CallbackServe
 
 grpc::ServerUnaryReactor* GatekeeperService::PutMachineModel(grpc::CallbackServerContext* ctx,
                                                              const pb::PutMachineModelRequest* request, pb::MachineInfo* response) {
-  return unary(ctx, stats_, "PutMachineModel", [&]() -> grpc::Status {
+  return run_queued(record_pool_, stats_, ctx, "PutMachineModel", request, response,
+                    [this, ctx](const pb::PutMachineModelRequest& put, pb::MachineInfo* out) -> grpc::Status {
     if (auto allowed = require_role(ctx, Role::kAdmin); !allowed.ok()) return allowed;
-    if (auto bad = check_id(request->machine_id(), "machine_id"); !bad.ok()) return to_status(bad.error());
-    auto put = machines_.put_model(request->machine_id(), request->model_toml());
-    if (!put.ok()) return grpc::Status(to_status(put.error()));
-    return grpc::Status(machine_info(request->machine_id(), response));
+    if (auto bad = check_id(put.machine_id(), "machine_id"); !bad.ok()) return to_status(bad.error());
+    auto stored = machines_.put_model(put.machine_id(), put.model_toml());
+    if (!stored.ok()) return grpc::Status(to_status(stored.error()));
+    return grpc::Status(machine_info(put.machine_id(), out));
   });
 }
 

@@ -38,8 +38,11 @@ struct ServiceOptions {
   // max_validations_in_flight; beyond, RESOURCE_EXHAUSTED.
   int validation_workers = 2;
   int part_validation_workers = 1;
-  int scene_workers = 2;           // PutObject and MoveObject (their contacts); queue: max_queued
+  int scene_workers = 2;           // PutObject(s), MoveObject and drag frames (their contacts); queue: max_queued
   int max_validations_in_flight = 64;
+  // Stored records that take milliseconds to write or render (PutObjects batches, machine models,
+  // audit reports and their pages): off the callback threads, apart from the geometry; queue: max_queued.
+  int record_workers = 1;
   std::size_t max_open_uploads = 64;             // upload streams open at once; beyond, RESOURCE_EXHAUSTED
   std::chrono::milliseconds upload_idle_limit{60000};  // an upload silent this long is cancelled
   // Ended audits kept in memory (the rest are read from the archive when asked for).
@@ -58,6 +61,7 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
     validation_pool_.stop();
     part_validation_pool_.stop();
     scene_pool_.stop();
+    record_pool_.stop();
     pool_.stop();
     upload_pool_.stop();
     audit_pool_.stop();
@@ -65,6 +69,7 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
   RpcStats& stats() { return stats_; }
   PartRegistry& parts() { return parts_; }
   WorkPool& upload_pool() { return upload_pool_; }
+  WorkPool& scene_pool() { return scene_pool_; }
   UploadSlots& upload_slots() { return upload_slots_; }
 
   grpc::ServerUnaryReactor* ValidateStep(grpc::CallbackServerContext* ctx, const pb::ValidateStepRequest* request,
@@ -142,7 +147,8 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
   RpcStats stats_;
   WorkPool validation_pool_;
   WorkPool part_validation_pool_;
-  WorkPool scene_pool_;  // scene edits that compute contacts (PutObject, MoveObject)
+  WorkPool scene_pool_;  // scene edits (PutObject(s), MoveObject, drag frames)
+  WorkPool record_pool_;  // PutObjects batches, machine models, audit reports
   WorkPool pool_;  // clearance queries
   WorkPool upload_pool_;
   WorkPool audit_pool_;

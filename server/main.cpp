@@ -52,6 +52,7 @@ struct Config {
   int part_validation_workers = 1;
   int upload_workers = 1;
   int scene_workers = 2;
+  int record_workers = 1;
   gk::server::AccessOptions access;
 };
 
@@ -95,6 +96,9 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 64));
   app.add_option("--upload-workers", config.upload_workers, "threads reading finished uploads")->check(CLI::Range(1, 64));
   app.add_option("--scene-workers", config.scene_workers, "threads placing and moving scene objects (their contacts)")
+      ->check(CLI::Range(1, 64));
+  app.add_option("--record-workers", config.record_workers,
+                 "threads writing scene batches and machine models and reading audit reports")
       ->check(CLI::Range(1, 64));
   app.add_option("--queue", config.queue, "queued jobs beyond which requests get RESOURCE_EXHAUSTED")->check(CLI::Range(1, 100000));
   app.add_option("--audit-jobs", config.audit_jobs, "audits run at once, on their own threads (a running audit never delays queries)")
@@ -188,6 +192,7 @@ int main(int argc, char** argv) {
   options.part_validation_workers = config.part_validation_workers;
   options.upload_workers = config.upload_workers;
   options.scene_workers = config.scene_workers;
+  options.record_workers = config.record_workers;
   options.ended_audits_in_memory = static_cast<std::size_t>(config.audits_in_memory);
   options.max_open_uploads = static_cast<std::size_t>(config.max_uploads);
   options.upload_idle_limit = std::chrono::milliseconds(static_cast<long long>(config.upload_idle_seconds * 1000.0));

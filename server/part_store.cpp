@@ -42,6 +42,28 @@ Error storage_error(const std::string& what) { return {ErrorCode::kInternal, "st
 }  // namespace
 
 bool is_supported_format(const std::string& format) { return formats().count(format) > 0; }
+
+namespace {
+// Names of one reader: the same bytes give the same part under either.
+std::string canonical_format(const std::string& format) {
+  if (format == "stp") return "step";
+  if (format == "igs") return "iges";
+  if (format == "glb") return "gltf";
+  return format;
+}
+}  // namespace
+
+bool is_part_id(const std::string& id) {
+  return id.size() == 64 && id.find_first_not_of("0123456789abcdef") == std::string::npos;
+}
+
+namespace {
+Error same_bytes_other_format(const PartRecord& stored, const std::string& format) {
+  return Error{ErrorCode::kFailedPrecondition, "header.format",
+               "these bytes are already part " + stored.id + ", read as " + stored.format + "; read as " + format +
+                   " they would be another geometry under the same id"};
+}
+}  // namespace
 bool is_cad_format(const std::string& format) {
   return format == "step" || format == "stp" || format == "brep" || format == "iges" || format == "igs";
 }
@@ -112,8 +134,9 @@ Result<std::unique_ptr<PartUpload>> PartStore::begin(const std::string& name, co
   if (!is_supported_format(format)) return invalid_argument("header.format", "unsupported format '" + format + "'");
   if (size_bytes == 0) return invalid_argument("header.size_bytes", "must be positive");
   if (size_bytes > kMaxPartBytes) return invalid_argument("header.size_bytes", "larger than the 2 GiB limit");
-  if (sha256_hex.size() != 64 || sha256_hex.find_first_not_of("0123456789abcdef") != std::string::npos)
-    return invalid_argument("header.sha256", "must be 64 lower-case hex digits");
+  if (!is_part_id(sha256_hex)) return invalid_argument("header.sha256", "must be 64 lower-case hex digits");
+  if (auto stored = get(sha256_hex); stored.ok() && canonical_format(stored.value().format) != canonical_format(format))
+    return same_bytes_other_format(stored.value(), format);
   std::unique_ptr<PartUpload> upload(new PartUpload());
   static std::atomic<unsigned long long> counter{0};
   upload->tmp_path_ = dir_ + "/tmp/upload-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
@@ -150,6 +173,12 @@ Result<PartRecord> PartStore::finish(std::unique_ptr<PartUpload> upload,
   record = described.value();
 
   std::lock_guard<std::mutex> lock(mutex_);
+  // The same bytes again: the part stands as stored (read as another format they would be
+  // another geometry under the same id).
+  if (auto stored = get_locked(sha); stored.ok()) {
+    if (canonical_format(stored.value().format) != canonical_format(record.format)) return same_bytes_other_format(stored.value(), record.format);
+    return stored.value();
+  }
   if (std::rename(upload->tmp_path_.c_str(), final_path.c_str()) != 0) return storage_error("cannot move the upload into place");
   upload->finished_ = true;
   if (!fsync_directory(dir_ + "/parts")) return storage_error("cannot fsync the part directory");
@@ -176,6 +205,12 @@ Result<PartRecord> PartStore::finish(std::unique_ptr<PartUpload> upload,
 
 Result<PartRecord> PartStore::get(const std::string& id) const {
   std::lock_guard<std::mutex> lock(mutex_);
+  return get_locked(id);
+}
+
+Result<PartRecord> PartStore::get_locked(const std::string& id) const {
+  // Checked before SQLite sees it, which would read an id only up to a NUL byte.
+  if (!is_part_id(id)) return invalid_argument("part_id", "must be the 64 lower-case hex digits of a sha256");
   sqlite3_stmt* stmt = nullptr;
   sqlite3_prepare_v2(db_, "SELECT id, name, format, size, triangles, min_x, min_y, min_z, max_x, max_y, max_z, closed "
                           "FROM parts WHERE id = ?", -1, &stmt, nullptr);

@@ -64,7 +64,7 @@ class PartStore {
   Result<PartRecord> finish(std::unique_ptr<PartUpload> upload,
                             const std::function<Result<PartRecord>(const std::string& path, PartRecord)>& describe);
 
-  Result<PartRecord> get(const std::string& id) const;
+  Result<PartRecord> get(const std::string& id) const;  // id: a sha256 in hex, else INVALID_ARGUMENT
   std::string path_of(const PartRecord& record) const;
   std::uint64_t count() const;
 
@@ -72,10 +72,12 @@ class PartStore {
   PartStore() = default;
   std::string dir_;
   sqlite3* db_ = nullptr;
+  Result<PartRecord> get_locked(const std::string& id) const;
   mutable std::mutex mutex_;
 };
 
 bool is_supported_format(const std::string& format);
 bool is_cad_format(const std::string& format);
+bool is_part_id(const std::string& id);  // 64 lower-case hex digits (a sha256)
 
 }  // namespace gk::server

@@ -18,17 +18,21 @@ namespace gk::server {
 namespace {
 
 // The drag stream: each move is stored and answered with its contacts before the next is read.
+// A frame's work runs on the scene pool like a unary move (gRPC's callback thread only hands it
+// over); a full pool ends the stream with RESOURCE_EXHAUSTED, a cancelled client skips the work.
 class DragReactor final : public grpc::ServerBidiReactor<pb::MoveObjectRequest, pb::MoveResult> {
  public:
-  explicit DragReactor(GatekeeperService& service) : service_(service) { StartRead(&request_); }
+  DragReactor(GatekeeperService& service, grpc::CallbackServerContext* ctx) : service_(service), ctx_(ctx) {
+    StartRead(&request_);
+  }
   void OnReadDone(bool ok) override {
     if (!ok) return Finish(grpc::Status::OK);  // the client is done dragging
     const auto t0 = Clock::now();
-    reply_.Clear();
-    const grpc::Status s = guarded_status("DragObject", [&] { return service_.move(request_, &reply_, &session_); });
-    service_.stats().record("DragObject.move", us_since(t0), !s.ok());
-    if (!s.ok()) return Finish(s);
-    StartWrite(&reply_);
+    const bool queued = service_.scene_pool().try_submit([this, t0] { answer_frame(t0); });
+    if (!queued) {
+      service_.stats().record("DragObject.move", us_since(t0), true);
+      Finish({grpc::StatusCode::RESOURCE_EXHAUSTED, "DragObject: too much scene work queued, retry later"});
+    }
   }
   void OnWriteDone(bool ok) override {
     if (!ok) return Finish({grpc::StatusCode::CANCELLED, "the client went away"});
@@ -37,7 +41,18 @@ class DragReactor final : public grpc::ServerBidiReactor<pb::MoveObjectRequest, 
   void OnDone() override { delete this; }
 
  private:
+  // On a scene worker: the frame's move and contacts, then its reply (or the stream's end).
+  void answer_frame(Clock::time_point t0) {
+    if (ctx_->IsCancelled()) return Finish({grpc::StatusCode::CANCELLED, "cancelled by the client"});
+    reply_.Clear();
+    const grpc::Status s = guarded_status("DragObject", [&] { return service_.move(request_, &reply_, &session_); });
+    service_.stats().record("DragObject.move", us_since(t0), !s.ok());
+    if (!s.ok()) return Finish(s);
+    StartWrite(&reply_);
+  }
+
   GatekeeperService& service_;
+  grpc::CallbackServerContext* ctx_;
   pb::MoveObjectRequest request_;
   pb::MoveResult reply_;
   DragSession session_;
@@ -205,13 +220,14 @@ grpc::ServerUnaryReactor* GatekeeperService::PutObject(grpc::CallbackServerConte
 
 grpc::ServerUnaryReactor* GatekeeperService::PutObjects(grpc::CallbackServerContext* ctx, const pb::PutObjectsRequest* request,
                                                         pb::PutObjectsResponse* response) {
-  return unary(ctx, stats_, "PutObjects", [&]() -> grpc::Status {
+  return run_queued(record_pool_, stats_, ctx, "PutObjects", request, response,
+                    [this, ctx](const pb::PutObjectsRequest& put, pb::PutObjectsResponse* out) -> grpc::Status {
     if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
     // Every object is checked before anything is stored, so a bad one leaves the scene as it was.
     std::vector<SceneObjectRecord> objects;
     std::set<std::string> known_parts;
-    for (int i = 0; i < request->objects_size(); ++i) {
-      const pb::SceneObject& in = request->objects(i);
+    for (int i = 0; i < put.objects_size(); ++i) {
+      const pb::SceneObject& in = put.objects(i);
       const std::string field = "objects[" + std::to_string(i) + "]";
       if (auto bad = check_object(in, field); !bad.ok()) return to_status(bad.error());
       if (!known_parts.count(in.part_id())) {
@@ -223,9 +239,9 @@ grpc::ServerUnaryReactor* GatekeeperService::PutObjects(grpc::CallbackServerCont
       if (!pose.ok()) return grpc::Status(to_status(pose.error()));
       objects.push_back({in.object_id(), in.name(), in.category(), in.part_id(), pose.value(), in.group()});
     }
-    auto stored = scenes_.put_many(request->scene_id(), std::move(objects));
+    auto stored = scenes_.put_many(put.scene_id(), std::move(objects));
     if (!stored.ok()) return grpc::Status(to_status(stored.error()));
-    for (const SceneObjectRecord& o : stored.value()) response->add_object_ids(o.id);
+    for (const SceneObjectRecord& o : stored.value()) out->add_object_ids(o.id);
     return grpc::Status(grpc::Status::OK);
   });
 }
@@ -244,7 +260,7 @@ grpc::ServerBidiReactor<pb::MoveObjectRequest, pb::MoveResult>* GatekeeperServic
     stats_.record("DragObject", 0.0, true);
     return new RefusedStream<grpc::ServerBidiReactor<pb::MoveObjectRequest, pb::MoveResult>>(allowed);
   }
-  return new DragReactor(*this);
+  return new DragReactor(*this, ctx);
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::DeleteObject(grpc::CallbackServerContext* ctx, const pb::DeleteObjectRequest* request,
@@ -348,13 +364,15 @@ grpc::ServerUnaryReactor* GatekeeperService::CancelAudit(grpc::CallbackServerCon
 
 grpc::ServerUnaryReactor* GatekeeperService::GetAuditReport(grpc::CallbackServerContext* ctx,
                                                             const pb::GetAuditReportRequest* request, pb::AuditReport* response) {
-  return unary(ctx, stats_, "GetAuditReport", [&]() -> grpc::Status {
-    auto job = audits_.get(request->job_id());
+  // Read back from the archive when evicted, and rendered as a page on request: off the callback thread.
+  return run_queued(record_pool_, stats_, ctx, "GetAuditReport", request, response,
+                    [this](const pb::GetAuditReportRequest& get, pb::AuditReport* out) -> grpc::Status {
+    auto job = audits_.get(get.job_id());
     if (!job.ok()) return grpc::Status(to_status(job.error()));
     const AuditSnapshot snapshot = job.value()->snapshot();
-    progress_to_proto(request->job_id(), snapshot, response->mutable_progress());
-    report_to_proto(snapshot, response);
-    if (request->html()) response->set_html(audit_report_page(*response, job.value()->scene().name, job.value()->objects()));
+    progress_to_proto(get.job_id(), snapshot, out->mutable_progress());
+    report_to_proto(snapshot, out);
+    if (get.html()) out->set_html(audit_report_page(*out, job.value()->scene().name, job.value()->objects()));
     return grpc::Status(grpc::Status::OK);
   });
 }

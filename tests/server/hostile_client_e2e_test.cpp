@@ -404,5 +404,149 @@ TEST(HostileClientE2E, AuditIdsAreUniqueAcrossRestarts) {
   }
 }
 
+// Validations of uploaded parts (each cold one prepares a large surface mesh) run on their own
+// workers: a parametric step asked after them is answered while they are still being worked on,
+// not queued behind them.
+TEST(HostileClientE2E, SlowUploadedPartValidationsDoNotQueueParametricOnes) {
+  Daemon daemon(testing::temp_dir("hostile-validation-pools"), {"--part-validation-workers", "1"});
+  auto stub = daemon.stub();
+  std::vector<std::string> parts;
+  for (const char* name : {"refined_elephant", "diplodocus", "man", "fandisk_large", "mannequin-devil", "camel"})
+    parts.push_back(testing::upload_part_id(*stub, testing::read_file(testing::shared_data(std::string("meshes/cgal/") + name + ".off")), "off"));
+  auto clamp_of = [](const std::string& part_id) {
+    pb::ValidateStepRequest r;
+    if (!part_id.empty()) r.mutable_part()->set_part_id(part_id);
+    else {
+      r.mutable_part()->set_width_mm(1000.0);
+      r.mutable_part()->set_depth_mm(800.0);
+    }
+    r.mutable_part()->set_thickness_mm(1.5);
+    r.mutable_step()->set_kind(pb::CLAMP);
+    r.mutable_state()->set_clamp_z_mm(1.5);
+    r.mutable_state()->set_manipulator_y_mm(-400.0);
+    return r;
+  };
+  const std::size_t n = parts.size();
+  std::vector<pb::ValidateStepRequest> requests;
+  std::vector<pb::ValidateStepResponse> answers(n);
+  std::vector<grpc::Status> statuses(n);
+  std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
+  std::atomic<std::size_t> finished{0};
+  for (const std::string& id : parts) requests.push_back(clamp_of(id));
+  for (std::size_t i = 0; i < n; ++i) {
+    contexts.push_back(std::make_unique<grpc::ClientContext>());
+    stub->async()->ValidateStep(contexts[i].get(), &requests[i], &answers[i], [&, i](grpc::Status s) {
+      statuses[i] = std::move(s);
+      ++finished;
+    });
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));  // let them reach the daemon first
+  pb::ValidateStepResponse parametric;
+  grpc::ClientContext ctx;
+  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+  const grpc::Status s = stub->ValidateStep(&ctx, clamp_of(""), &parametric);
+  const std::size_t uploaded_done_then = finished.load();
+  ASSERT_TRUE(s.ok()) << s.error_message();
+  EXPECT_NE(parametric.verdict(), pb::VERDICT_UNSPECIFIED);
+  EXPECT_LT(uploaded_done_then, n) << "the parametric step was answered only after every uploaded-part validation: it queued behind them";
+  while (finished.load() < n) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  for (std::size_t i = 0; i < n; ++i) {
+    EXPECT_TRUE(statuses[i].ok()) << i << ": " << statuses[i].error_message();
+    EXPECT_NE(answers[i].verdict(), pb::VERDICT_UNSPECIFIED) << i;
+  }
+  expect_alive(*stub);
+}
+
+// Bytes that read as two formats (found by a review: 134 bytes that are a binary STL triangle at
+// z = 5 and an OBJ triangle at z = 0) keep one geometry under their id: the second format is
+// refused, and the part stays what it was, also after a restart.
+TEST(HostileClientE2E, TheSameBytesAsAnotherFormatAreRefusedAndThePartKeepsItsGeometry) {
+  std::string bytes = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n#";
+  bytes.resize(80, ' ');
+  const std::uint32_t count = 1;
+  bytes.append(reinterpret_cast<const char*>(&count), 4);
+  const float triangle[12] = {0, 0, 1, 0, 0, 5, 1, 0, 5, 0, 1, 5};
+  bytes.append(reinterpret_cast<const char*>(triangle), sizeof triangle);
+  bytes.append(2, '\0');
+  ASSERT_EQ(bytes.size(), 134u);
+  const std::string dir = testing::temp_dir("hostile-two-formats");
+  std::string id;
+  {
+    Daemon daemon(dir);
+    auto stub = daemon.stub();
+    pb::PartInfo stl, obj;
+    ASSERT_TRUE(testing::upload_part(*stub, bytes, "stl", &stl).ok());
+    EXPECT_EQ(stl.bounds_min().z_mm(), 5.0);
+    const grpc::Status again = testing::upload_part(*stub, bytes, "obj", &obj);
+    EXPECT_EQ(again.error_code(), grpc::StatusCode::FAILED_PRECONDITION) << again.error_message();
+    EXPECT_NE(again.error_message().find("header.format"), std::string::npos) << again.error_message();
+    pb::PartInfo same;
+    ASSERT_TRUE(testing::upload_part(*stub, bytes, "stl", &same).ok());  // the same format again: the same part
+    EXPECT_EQ(same.part_id(), stl.part_id());
+    id = stl.part_id();
+  }
+  Daemon daemon(dir);
+  auto stub = daemon.stub();
+  grpc::ClientContext ctx;
+  pb::GetPartInfoRequest get;
+  get.set_part_id(id);
+  pb::PartInfo info;
+  ASSERT_TRUE(stub->GetPartInfo(&ctx, get, &info).ok());
+  EXPECT_EQ(info.format(), "stl");
+  EXPECT_EQ(info.bounds_min().z_mm(), 5.0);
+}
+
+// A part id is a sha256 in hex, and a name holds no control characters: a NUL, which SQLite would
+// have cut the stored text at, is refused naming the field.
+TEST(HostileClientE2E, PartIdsAndNamesWithANulAreRefused) {
+  Daemon daemon(testing::temp_dir("hostile-nul-ids"));
+  auto stub = daemon.stub();
+  const std::string box = testing::box_obj(0, 0, 0, 1, 1, 1);
+  const std::string id = testing::upload_part_id(*stub, box, "obj");
+  const std::string with_nul = id + std::string("\0../../etc/passwd", 17);
+  {
+    grpc::ClientContext ctx;
+    pb::GetPartInfoRequest get;
+    get.set_part_id(with_nul);
+    pb::PartInfo info;
+    const grpc::Status s = stub->GetPartInfo(&ctx, get, &info);
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+    EXPECT_NE(s.error_message().find("part_id"), std::string::npos) << s.error_message();
+  }
+  {
+    grpc::ClientContext cctx;
+    pb::SceneInfo scene;
+    ASSERT_TRUE(stub->CreateScene(&cctx, pb::CreateSceneRequest(), &scene).ok());
+    pb::PutObjectRequest put;
+    put.set_scene_id(scene.scene_id());
+    put.mutable_object()->set_part_id(with_nul);
+    grpc::ClientContext ctx;
+    pb::MoveResult out;
+    const grpc::Status s = stub->PutObject(&ctx, put, &out);
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+    EXPECT_NE(s.error_message().find("object.part_id"), std::string::npos) << s.error_message();
+  }
+  // NUL, DEL, and a right-to-left override (U+202E) that would show the name reversed.
+  for (const std::string& name : {std::string("a\0b", 3), std::string("a\x7f" "b"), std::string("a\xe2\x80\xae" "b")}) {
+    grpc::ClientContext ctx;
+    pb::PartInfo info;
+    auto writer = stub->UploadPart(&ctx, &info);
+    pb::UploadPartChunk header;
+    header.mutable_header()->set_name(name);
+    header.mutable_header()->set_format("obj");
+    header.mutable_header()->set_size_bytes(box.size());
+    header.mutable_header()->set_sha256(id);
+    writer->Write(header);
+    pb::UploadPartChunk data;
+    data.set_data(box);
+    writer->Write(data);
+    writer->WritesDone();
+    const grpc::Status s = writer->Finish();
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+    EXPECT_NE(s.error_message().find("header.name"), std::string::npos) << s.error_message();
+  }
+  expect_alive(*stub);
+}
+
 }  // namespace
 }  // namespace gk
