@@ -33,6 +33,23 @@ using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
 
 // The mesh's own coordinates (doubles, exact predicates), wound outward as a whole.
 using FilteredKernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+
+// CGAL's corefinement cannot be cancelled; its visitor is called at every step of its phases, and
+// an exception thrown there unwinds out of it (the meshes are this call's own copies).
+struct CorefinementStopped {};
+struct StoppingVisitor : PMP::Corefinement::Default_visitor<Mesh> {
+  const StopToken* stop = nullptr;
+  mutable unsigned long long steps = 0;
+  explicit StoppingVisitor(const StopToken* s) : stop(s) {}
+  void ask() const {
+    if ((steps++ & 255) == 0 && stop->stop_requested()) throw CorefinementStopped{};
+  }
+  void progress_filtering_intersections(double) const { ask(); }
+  void triangulating_faces_step() const { ask(); }
+  void intersection_of_coplanar_faces_step() const { ask(); }
+  void edge_face_intersections_step() const { ask(); }
+  void build_output_step() const { ask(); }
+};
 using LocalMesh = CGAL::Surface_mesh<FilteredKernel::Point_3>;
 
 Result<LocalMesh> local_mesh(const TriangleMesh& m, const char* side) {
@@ -153,7 +170,7 @@ Result<bool> bounds_a_volume(const TriangleMesh& mesh, const char* side) {
 }
 
 Result<ExactVolume> exact_interference_volume(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
-                                              const RigidTransform& pose_b) {
+                                              const RigidTransform& pose_b, const StopToken& stop) {
   for (const auto& [mesh, side] : {std::pair<const TriangleMesh*, const char*>{&a, "a"}, {&b, "b"}}) {
     auto valid = bounds_a_volume(*mesh, side);
     if (!valid.ok()) return valid.error();
@@ -172,7 +189,9 @@ Result<ExactVolume> exact_interference_volume(const TriangleMesh& a, const Rigid
     // or on the other surface as a whole.
     auto constrained_a = ea.add_property_map<Mesh::Edge_index, bool>("e:constrained", false).first;
     auto constrained_b = eb.add_property_map<Mesh::Edge_index, bool>("e:constrained", false).first;
-    PMP::corefine(ea, eb, CGAL::parameters::throw_on_self_intersection(true).edge_is_constrained_map(constrained_a),
+    PMP::corefine(ea, eb,
+                  CGAL::parameters::throw_on_self_intersection(true).edge_is_constrained_map(constrained_a).visitor(
+                      StoppingVisitor{&stop}),
                   CGAL::parameters::edge_is_constrained_map(constrained_b));
     ExactFT sum = 0;
     add_boundary_of_intersection(ea, constrained_a, eb, true, sum);
@@ -184,6 +203,8 @@ Result<ExactVolume> exact_interference_volume(const TriangleMesh& a, const Rigid
     return out;
   } catch (const PMP::Corefinement::Self_intersection_exception&) {
     return Error{ErrorCode::kFailedPrecondition, "a, b", "a mesh intersects itself where the parts meet: no well-defined inside"};
+  } catch (const CorefinementStopped&) {
+    return stopped("the exact corefinement");
   } catch (const std::exception& e) {
     return Error{ErrorCode::kInternal, "a, b", std::string("exact corefinement failed: ") + e.what()};
   }

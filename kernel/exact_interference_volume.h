@@ -11,6 +11,7 @@
 #include "kernel/triangle_mesh.h"
 #include "kernel/rigid_transform.h"
 #include "kernel/status.h"
+#include "kernel/stop_token.h"
 
 namespace gk {
 
@@ -28,7 +29,8 @@ Result<bool> bounds_a_volume(const TriangleMesh& mesh, const char* side);
 // Both meshes closed, consistently oriented, free of self-intersections near the overlap and
 // without non-manifold vertices; kFailedPrecondition (naming the side) when they are not: such a
 // mesh has no well-defined inside for a Boolean.
+// `stop` is asked at each step of the corefinement (kStopped when it says so).
 Result<ExactVolume> exact_interference_volume(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
-                                              const RigidTransform& pose_b);
+                                              const RigidTransform& pose_b, const StopToken& stop = {});
 
 }  // namespace gk

@@ -187,7 +187,8 @@ Result<VolumeEstimate> interference_volume(const MeshBvh& a, const RigidTransfor
     return out;
   }
   if (stop.stop_requested()) return stopped("the interference volume");
-  auto exact = exact_interference_volume(a.mesh(), pose_a, b.mesh(), pose_b);
+  auto exact = exact_interference_volume(a.mesh(), pose_a, b.mesh(), pose_b, stop);
+  if (!exact.ok() && exact.error().code == ErrorCode::kStopped) return exact.error();
   if (!exact.ok()) {
     out.exact_not_used = exact.error().to_string();
     return out;

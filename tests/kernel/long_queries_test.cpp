@@ -4,6 +4,7 @@
 // 100,000 contact witnesses crowded into a few grid cells pair by pair).
 #include "kernel/contact_regions.h"
 #include "kernel/contact_verdict.h"
+#include "kernel/exact_interference_volume.h"
 #include "kernel/mesh_collision.h"
 #include "kernel/mesh_distance.h"
 #include "tests/support/random_meshes.h"
@@ -42,6 +43,16 @@ TEST(LongQueries, EveryTraversalStopsWhenItsCallerGivesUp) {
   auto verdict = assess(*a, {}, *a, {}, options);
   ASSERT_FALSE(verdict.ok());
   EXPECT_EQ(verdict.error().code, ErrorCode::kStopped);
+  // The exact corefinement too (CGAL's, stopped from its visitor): once from the first step, and not
+  // at all when nobody asks.
+  auto small = blob(3);
+  const RigidTransform shifted = RigidTransform::from_translation(Vec3(30, 5, 2));
+  auto exact = exact_interference_volume(small->mesh(), {}, small->mesh(), shifted, gave_up);
+  ASSERT_FALSE(exact.ok());
+  EXPECT_EQ(exact.error().code, ErrorCode::kStopped) << exact.error().to_string();
+  auto answered = exact_interference_volume(small->mesh(), {}, small->mesh(), shifted);
+  ASSERT_TRUE(answered.ok()) << answered.error().to_string();
+  EXPECT_GT(answered.value().volume_mm3, 0.0);
   // Not asked to stop, the same queries answer.
   EXPECT_TRUE(collide(*a, {}, *a, {}, CollisionRequest{}).ok());
 }
