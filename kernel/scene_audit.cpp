@@ -176,6 +176,7 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
   for (const AuditObject& o : objects) deviation = std::max(deviation, o.surface_deviation_mm);
   const double margin = std::max(options.clearance_mm + 2.0 * deviation, tolerances::kContactMm) +
                         4.0 * tolerances::kBoxSlackRelative * magnitude;
+  bool broad_phase_cancelled = false;
   std::vector<char> wanted(objects.size(), options.only_objects.empty() ? 1 : 0);
   for (std::uint32_t id : options.only_objects) wanted[id] = 1;
   if (!options.only_objects.empty()) {
@@ -209,6 +210,7 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
     };
     std::vector<std::vector<std::uint32_t>> members(nx * ny);
     for (std::uint32_t i = 0; i < objects.size(); ++i) {
+      if (options.cancel && options.cancel->load()) break;  // the broad phase below sees it too
       const Aabb g = boxes[i].expanded(0.5 * margin);
       for (std::size_t x = tile_x(g.min.x()); x <= tile_x(g.max.x()); ++x)
         for (std::size_t y = tile_y(g.min.y()); y <= tile_y(g.max.y()); ++y) members[x * ny + y].push_back(i);
@@ -220,6 +222,8 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
     progress.tiles_total = nx * ny;
     std::vector<std::vector<IndexPair>> per_tile(nx * ny);
     parallel_for(nx * ny, options.threads, [&](std::size_t t) {
+      // Cancelled between tiles: a million small tiles of a crowded scene take many seconds.
+      if (options.cancel && options.cancel->load()) return;
       const std::vector<std::uint32_t>& ids = members[t];
       std::vector<Aabb> local;
       local.reserve(ids.size());
@@ -234,6 +238,8 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
       std::lock_guard<std::mutex> lock(report_mutex);
       ++progress.tiles_done;
     });
+    // Cancelled during the broad phase, the candidates are incomplete: never a report of "no clash".
+    broad_phase_cancelled = options.cancel && options.cancel->load();
     for (auto& v : per_tile) candidates.insert(candidates.end(), v.begin(), v.end());
     std::sort(candidates.begin(), candidates.end());
   }
@@ -285,7 +291,7 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
   for (std::size_t i = 0; i < work.size(); ++i)
     if (state[i] == 2) result.clashes.push_back(std::move(slots[i]));
   result.pairs_done = done;
-  result.cancelled = done < work.size();
+  result.cancelled = broad_phase_cancelled || done < work.size();
   result.times.narrow_s = seconds_since(t_narrow);
   result.times.total_s = seconds_since(t0);
   progress.pairs_done = done;

@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fcntl.h>
 #include <poll.h>
 #include <spawn.h>
@@ -102,6 +103,12 @@ Result<bool> check_cad_in_child(const std::string& path, const std::string& form
     }
   }
   ::close(channel[0]);
+  // A child killed or crashed never removed the link with the format's extension it made for the
+  // reader (server/part_registry): removed here, or refused uploads would pile up in tmp/.
+  if (std::filesystem::path(path).extension() != "." + format) {
+    std::error_code ec;
+    std::filesystem::remove(path + "." + format, ec);
+  }
   if (timed_out)
     return invalid_argument("data", "reading the CAD file took longer than " + std::to_string(sandbox.timeout.count()) +
                                         " s: refused");

@@ -89,7 +89,10 @@ class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> 
     slot_ = 0;
     if (!upload_) return done({grpc::StatusCode::INVALID_ARGUMENT, "header: no upload header received"});
     auto* self = this;
-    const bool queued = service_.upload_pool().try_submit([self] {
+    // CAD files are read in a child that may take up to --cad-check-seconds: on their own pool, so
+    // that a file that keeps the reader busy never holds up mesh uploads.
+    WorkPool& pool = is_cad_format(upload_->format()) ? service_.cad_upload_pool() : service_.upload_pool();
+    const bool queued = pool.try_submit([self] {
       const grpc::Status status = guarded_status("UploadPart", [&]() -> grpc::Status {
         return self->finish_upload();
       });
@@ -141,6 +144,7 @@ GatekeeperService::GatekeeperService(MachineRegistry& machines, PartRegistry& pa
       record_pool_(options.record_workers, options.max_queued),
       pool_(options.workers, options.max_queued),
       upload_pool_(options.upload_workers, options.max_queued),
+      cad_upload_pool_(options.upload_workers, options.max_queued),
       audit_pool_(options.audit_jobs, options.audit_queue),
       upload_slots_(options.max_open_uploads, options.upload_idle_limit) {
 }

@@ -27,7 +27,7 @@ namespace pb = ::gatekeeper::v1;
 struct ServiceOptions {
   int workers = 2;                 // clearance query threads
   std::size_t max_queued = 64;     // clearance queries and upload finishings queued; beyond, RESOURCE_EXHAUSTED
-  int upload_workers = 1;          // threads reading finished uploads (meshing CAD parts)
+  int upload_workers = 1;          // threads reading finished uploads: as many for mesh files, as many for CAD files
   int audit_threads = 2;           // threads of one audit job (its tiles, then its pairs)
   // Audit jobs run on their own pool, so that a running audit never delays a clearance query.
   int audit_jobs = 1;              // audits run at once
@@ -58,17 +58,20 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
   ~GatekeeperService() override;
 
   void stop_work() {
+    audits_.cancel_all();  // a running audit would hold the stop past any drain time
     validation_pool_.stop();
     part_validation_pool_.stop();
     scene_pool_.stop();
     record_pool_.stop();
     pool_.stop();
     upload_pool_.stop();
+    cad_upload_pool_.stop();
     audit_pool_.stop();
   }
   RpcStats& stats() { return stats_; }
   PartRegistry& parts() { return parts_; }
   WorkPool& upload_pool() { return upload_pool_; }
+  WorkPool& cad_upload_pool() { return cad_upload_pool_; }
   WorkPool& scene_pool() { return scene_pool_; }
   UploadSlots& upload_slots() { return upload_slots_; }
 
@@ -123,10 +126,12 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
  public:
   // A move of one object (unary, or one message of a drag): stored, then its contacts; a drag
   // answers through its stream's layout session.
-  grpc::Status move(const pb::MoveObjectRequest& request, pb::MoveResult* response, DragSession* drag = nullptr);
+  grpc::Status move(const pb::MoveObjectRequest& request, pb::MoveResult* response, DragSession* drag = nullptr,
+                    const StopToken& stop = {});
   // The stored object's contacts at its pose (through the drag's session when there is one).
   grpc::Status contacts(const std::string& scene_id, const std::string& object_id, double clearance_mm, const RigidTransform& pose,
-                        DragSession* drag, std::chrono::steady_clock::time_point t0, pb::MoveResult* response);
+                        DragSession* drag, std::chrono::steady_clock::time_point t0, pb::MoveResult* response,
+                        const StopToken& stop = {});
   SceneStore& scenes() { return scenes_; }
   AuditJobs& audits() { return audits_; }
 
@@ -150,7 +155,8 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
   WorkPool scene_pool_;  // scene edits (PutObject(s), MoveObject, drag frames)
   WorkPool record_pool_;  // PutObjects batches, machine models, audit reports
   WorkPool pool_;  // clearance queries
-  WorkPool upload_pool_;
+  WorkPool upload_pool_;      // finishing mesh uploads
+  WorkPool cad_upload_pool_;  // finishing CAD uploads (checked in a child first)
   WorkPool audit_pool_;
   UploadSlots upload_slots_;
 };

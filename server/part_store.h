@@ -34,6 +34,7 @@ class PartUpload {
   ~PartUpload();  // an unfinished upload leaves nothing behind
   Result<bool> append(const std::string& bytes);
   std::uint64_t received() const { return received_; }
+  const std::string& format() const { return format_; }
 
  private:
   friend class PartStore;

@@ -35,9 +35,10 @@ Result<Placed> place(const SceneObjectRecord& o, PartRegistry& parts) {
 // A pair the kernel reported from the triangles alone, decided again where a CAD part's
 // tessellation cannot tell (engine/pair_verdict); nullopt when it is no contact after all.
 Result<std::optional<engine::PairVerdict>> redecide(const engine::PosedPart& a, const engine::PosedPart& b,
-                                                    double clearance_mm) {
+                                                    double clearance_mm, const StopToken& stop = {}) {
   engine::PairVerdictOptions options;
   options.clearance_mm = clearance_mm;
+  options.mesh.stop = &stop;
   options.mesh.distance_upper_bound_mm = clearance_mm;
   auto v = engine::decide_pair(a, b, options);
   if (!v.ok()) return v.error();
@@ -112,7 +113,7 @@ Result<MoveOutcome> DragSession::move(const std::string& scene_id, std::uint64_t
 }
 
 Result<MoveOutcome> object_contacts(const SceneRecord& scene, const std::string& object_id, double clearance_mm,
-                                    PartRegistry& parts) {
+                                    PartRegistry& parts, const StopToken& stop) {
   if (!std::isfinite(clearance_mm) || clearance_mm < 0.0) return invalid_argument("clearance_mm", "must be >= 0");
   auto self_it = scene.objects.find(object_id);
   if (self_it == scene.objects.end()) return Error{ErrorCode::kNotFound, "object_id", "no object '" + object_id + "'"};
@@ -121,6 +122,7 @@ Result<MoveOutcome> object_contacts(const SceneRecord& scene, const std::string&
   MoveOutcome out;
   for (const auto& [id, other] : scene.objects) {
     if (id == object_id) continue;
+    if (stop.stop_requested()) return stopped("the moved object's contacts");
     auto placed = place(other, parts);
     if (!placed.ok()) return placed.error();
     // Boxes of triangles: a CAD part's true surface may stand out of its tessellation's box.
@@ -128,7 +130,7 @@ Result<MoveOutcome> object_contacts(const SceneRecord& scene, const std::string&
     if (!placed.value().box.overlaps(self.value().box.expanded(clearance_mm + deviation))) continue;
     ++out.candidates;
     auto v = redecide({self.value().part.get(), self.value().pose}, {placed.value().part.get(), placed.value().pose},
-                      clearance_mm);
+                      clearance_mm, stop);
     if (!v.ok()) return v.error();
     if (!v.value()) continue;
     const engine::PairVerdict& pv = *v.value();
@@ -392,6 +394,11 @@ void AuditJobs::drop_beyond_limit() {
 std::size_t AuditJobs::in_memory() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return jobs_.size();
+}
+
+void AuditJobs::cancel_all() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (auto& [id, job] : jobs_) job->cancel();
 }
 
 void AuditJobs::remove(const std::string& id) {

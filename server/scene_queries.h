@@ -2,6 +2,7 @@
 // move of a drag), and the interference audit of every pair, as a cancellable job with progress.
 #pragma once
 
+#include "kernel/stop_token.h"
 #include "engine/pair_verdict.h"
 #include "kernel/contact_verdict.h"
 #include "kernel/layout_session.h"
@@ -71,8 +72,9 @@ class DragSession {
 
 // The object against every other object of the scene: those whose boxes (grown by clearance_mm)
 // meet get an exact verdict; colliding, touching or closer-than-clearance ones are reported.
+// `stop`: a caller that gave up (deadline, cancel) ends the work (kStopped).
 Result<MoveOutcome> object_contacts(const SceneRecord& scene, const std::string& object_id, double clearance_mm,
-                                    PartRegistry& parts);
+                                    PartRegistry& parts, const StopToken& stop = {});
 
 // A clash between two scene objects: the kernel's answer and who they are.
 struct ClashRecord {
@@ -170,6 +172,9 @@ class AuditJobs {
   // The job ended and is safely archived: from now on it may be dropped from memory.
   void archived(const std::string& id);
   void remove(const std::string& id);
+  // Every job still running stops (the daemon is stopping): each ends CANCELLED with the pairs it
+  // finished, archived like any ended job.
+  void cancel_all();
   Result<std::shared_ptr<AuditJob>> get(const std::string& id);
   std::size_t in_memory() const;
 

@@ -155,7 +155,8 @@ grpc::ServerUnaryReactor* GatekeeperService::CreateScene(grpc::CallbackServerCon
   });
 }
 
-grpc::Status GatekeeperService::move(const pb::MoveObjectRequest& request, pb::MoveResult* response, DragSession* drag) {
+grpc::Status GatekeeperService::move(const pb::MoveObjectRequest& request, pb::MoveResult* response, DragSession* drag,
+                                     const StopToken& stop) {
   const auto t0 = Clock::now();
   auto pose = to_stored_pose(request.pose(), "pose");
   if (!pose.ok()) return to_status(pose.error());
@@ -163,12 +164,13 @@ grpc::Status GatekeeperService::move(const pb::MoveObjectRequest& request, pb::M
     return {grpc::StatusCode::INVALID_ARGUMENT, "clearance_mm: must be a finite distance >= 0"};
   auto moved = scenes_.move(request.scene_id(), request.object_id(), pose.value());
   if (!moved.ok()) return to_status(moved.error());
-  return contacts(request.scene_id(), request.object_id(), request.clearance_mm(), pose.value().transform(), drag, t0, response);
+  return contacts(request.scene_id(), request.object_id(), request.clearance_mm(), pose.value().transform(), drag, t0, response,
+                  stop);
 }
 
 grpc::Status GatekeeperService::contacts(const std::string& scene_id, const std::string& object_id, double clearance_mm,
                                          const RigidTransform& pose, DragSession* drag, Clock::time_point t0,
-                                         pb::MoveResult* response) {
+                                         pb::MoveResult* response, const StopToken& stop) {
   Result<MoveOutcome> outcome = Error{};
   if (drag) {
     auto version = scenes_.version(scene_id);
@@ -177,7 +179,7 @@ grpc::Status GatekeeperService::contacts(const std::string& scene_id, const std:
   } else {
     auto scene = scenes_.get(scene_id);
     if (!scene.ok()) return to_status(scene.error());
-    outcome = object_contacts(scene.value(), object_id, clearance_mm, parts_);
+    outcome = object_contacts(scene.value(), object_id, clearance_mm, parts_, stop);
   }
   if (!outcome.ok()) return to_status(outcome.error());
   response->set_object_id(object_id);
@@ -214,7 +216,8 @@ grpc::ServerUnaryReactor* GatekeeperService::PutObject(grpc::CallbackServerConte
     auto stored = scenes_.put(put.scene_id(), {in.object_id(), in.name(), in.category(), in.part_id(), pose.value(), in.group()});
     if (!stored.ok()) return to_status(stored.error());
     // Stored once; then the new object's contacts, as a move would answer them.
-    return contacts(put.scene_id(), stored.value().id, put.clearance_mm(), pose.value().transform(), nullptr, t0, out);
+    const StopToken stop([ctx] { return ctx->IsCancelled() || past_deadline(ctx); });
+    return contacts(put.scene_id(), stored.value().id, put.clearance_mm(), pose.value().transform(), nullptr, t0, out, stop);
   });
 }
 
@@ -251,7 +254,8 @@ grpc::ServerUnaryReactor* GatekeeperService::MoveObject(grpc::CallbackServerCont
   return run_queued(scene_pool_, stats_, ctx, "MoveObject", request, response,
                     [this, ctx](const pb::MoveObjectRequest& r, pb::MoveResult* out) -> grpc::Status {
                       if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
-                      return grpc::Status(move(r, out));
+                      const StopToken stop([ctx] { return ctx->IsCancelled() || past_deadline(ctx); });
+                      return grpc::Status(move(r, out, nullptr, stop));
                     });
 }
 

@@ -8,6 +8,7 @@
 
 #include <atomic>
 #include <csignal>
+#include <filesystem>
 #include <set>
 #include <thread>
 #include <vector>
@@ -97,7 +98,8 @@ END-ISO-10303-1;
 )step";
 
 TEST(HostileClientE2E, ACadFileThatCrashesOcctsReaderIsRefusedAndTheDaemonServesOn) {
-  Daemon daemon(testing::temp_dir("hostile-cad-crash"));
+  const std::string dir = testing::temp_dir("hostile-cad-crash");
+  Daemon daemon(dir);
   auto stub = daemon.stub();
   for (int round = 0; round < 3; ++round) {
     pb::PartInfo info;
@@ -107,6 +109,9 @@ TEST(HostileClientE2E, ACadFileThatCrashesOcctsReaderIsRefusedAndTheDaemonServes
     EXPECT_NE(s.error_message().find("refused"), std::string::npos) << s.error_message();
     expect_alive(*stub);
   }
+  // Nothing of the refused uploads is left behind (the crashed child's link with the format's
+  // extension was, once per upload).
+  EXPECT_TRUE(std::filesystem::is_empty(dir + "/tmp")) << std::filesystem::begin(std::filesystem::directory_iterator(dir + "/tmp"))->path();
   // A sound CAD file still goes through the child and is stored.
   const std::string screw = testing::upload_part_id(*stub, testing::read_file(testing::shared_data("step/occt/screw.step")), "step");
   EXPECT_FALSE(screw.empty());
@@ -546,6 +551,125 @@ TEST(HostileClientE2E, PartIdsAndNamesWithANulAreRefused) {
     EXPECT_NE(s.error_message().find("header.name"), std::string::npos) << s.error_message();
   }
   expect_alive(*stub);
+}
+
+// A scene of n copies of FCL's robot at one pose (every pair clashes in every tile it spans).
+std::string stacked_robots(pb::Gatekeeper::Stub& stub, int n) {
+  const std::string rob = testing::upload_part_id(stub, testing::read_file(testing::shared_data("meshes/fcl/rob.obj")), "obj");
+  grpc::ClientContext cctx;
+  pb::SceneInfo scene;
+  EXPECT_TRUE(stub.CreateScene(&cctx, pb::CreateSceneRequest(), &scene).ok());
+  pb::PutObjectsRequest put;
+  put.set_scene_id(scene.scene_id());
+  for (int i = 0; i < n; ++i) put.add_objects()->set_part_id(rob);
+  grpc::ClientContext pctx;
+  pb::PutObjectsResponse ids;
+  EXPECT_TRUE(stub.PutObjects(&pctx, put, &ids).ok());
+  return scene.scene_id();
+}
+
+pb::AuditProgress audit_state(pb::Gatekeeper::Stub& stub, const std::string& job) {
+  pb::GetAuditReportRequest get;
+  get.set_job_id(job);
+  pb::AuditReport report;
+  grpc::ClientContext ctx;
+  EXPECT_TRUE(stub.GetAuditReport(&ctx, get, &report).ok());
+  return report.progress();
+}
+
+// Found by a review: with a million small tiles the broad phase ran on for many seconds after
+// CancelAudit (and a SIGTERM waited for it past the drain time). It stops between tiles, and a
+// broad phase cut short is never reported DONE.
+TEST(HostileClientE2E, AnAuditOfAMillionTilesStopsWhenCancelled) {
+  Daemon daemon(testing::temp_dir("hostile-tiles-cancel"));
+  auto stub = daemon.stub();
+  const std::string scene = stacked_robots(*stub, 40);
+  pb::StartAuditRequest start;
+  start.set_scene_id(scene);
+  start.set_tile_mm(1.2);
+  pb::AuditJob job;
+  grpc::ClientContext sctx;
+  ASSERT_TRUE(stub->StartAudit(&sctx, start, &job).ok());
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  pb::CancelAuditRequest cancel;
+  cancel.set_job_id(job.job_id());
+  pb::AuditProgress p;
+  grpc::ClientContext cctx;
+  ASSERT_TRUE(stub->CancelAudit(&cctx, cancel, &p).ok());
+  const auto t0 = std::chrono::steady_clock::now();
+  pb::AuditProgress state = audit_state(*stub, job.job_id());
+  while (state.state() == pb::RUNNING && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(20)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    state = audit_state(*stub, job.job_id());
+  }
+  EXPECT_EQ(state.state(), pb::CANCELLED);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0 * testing::kTimeScale);
+}
+
+// SIGTERM cancels a running audit rather than waiting for it: the daemon stops within its drain
+// time (it took 14 s with --drain-seconds 1), and the audit is kept as CANCELLED.
+TEST(HostileClientE2E, SigtermDoesNotWaitForARunningAudit) {
+  const std::string dir = testing::temp_dir("hostile-sigterm-audit");
+  std::string id;
+  {
+    Daemon daemon(dir);  // the fixture's drain time is 1 s
+    auto stub = daemon.stub();
+    const std::string scene = robot_row(*stub, 80);
+    pb::StartAuditRequest start;
+    start.set_scene_id(scene);
+    start.set_clearance_mm(50.0);
+    start.set_compute_depth(true);
+    start.set_compute_volume(true);
+    pb::AuditJob job;
+    grpc::ClientContext ctx;
+    ASSERT_TRUE(stub->StartAudit(&ctx, start, &job).ok());
+    id = job.job_id();
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    ASSERT_EQ(audit_state(*stub, id).state(), pb::RUNNING) << "the audit is too quick to show anything";
+    const auto t0 = std::chrono::steady_clock::now();
+    EXPECT_EQ(daemon.stop(SIGTERM), 0);
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 1.0 + 3.0 * testing::kTimeScale);
+  }
+  Daemon again(dir);
+  EXPECT_EQ(audit_state(*again.stub(), id).state(), pb::CANCELLED);
+}
+
+// A MoveObject whose deadline passes stops computing the moved object's contacts: the one scene
+// worker is free for the next move at once (3,000 stacked robots took it 5 s past a 0.3 s deadline).
+TEST(HostileClientE2E, ADeadlineStopsAMovesContacts) {
+  Daemon daemon(testing::temp_dir("hostile-move-deadline"), {"--scene-workers", "1"});
+  auto stub = daemon.stub();
+  const std::string crowded = stacked_robots(*stub, 3000);
+  pb::GetSceneRequest get;
+  get.set_scene_id(crowded);
+  pb::SceneInfo info;
+  grpc::ClientContext gctx;
+  ASSERT_TRUE(stub->GetScene(&gctx, get, &info).ok());
+  pb::MoveObjectRequest move;
+  move.set_scene_id(crowded);
+  move.set_object_id(info.objects(0).object_id());
+  move.mutable_pose()->mutable_translation()->set_x_mm(1.0);
+  {
+    grpc::ClientContext ctx;
+    ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::milliseconds(300));
+    pb::MoveResult out;
+    EXPECT_EQ(stub->MoveObject(&ctx, move, &out).error_code(), grpc::StatusCode::DEADLINE_EXCEEDED);
+  }
+  const std::string small = stacked_robots(*stub, 2);
+  pb::GetSceneRequest get_small;
+  get_small.set_scene_id(small);
+  pb::SceneInfo small_info;
+  grpc::ClientContext sgctx;
+  ASSERT_TRUE(stub->GetScene(&sgctx, get_small, &small_info).ok());
+  pb::MoveObjectRequest quick;
+  quick.set_scene_id(small);
+  quick.set_object_id(small_info.objects(0).object_id());
+  grpc::ClientContext ctx;
+  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::milliseconds(1500 * testing::kTimeScale));
+  pb::MoveResult out;
+  const grpc::Status s = stub->MoveObject(&ctx, quick, &out);
+  EXPECT_TRUE(s.ok()) << s.error_message();
+  EXPECT_EQ(out.verdict(), pb::COLLISION);
 }
 
 }  // namespace
