@@ -43,7 +43,9 @@ std::vector<ContactRegion> group_into_regions(const std::vector<ProximityPair>& 
     for (std::size_t i = 0; i < pairs.size(); ++i) cells[grid_cell_of(pairs[i].point_a, cell_mm)].push_back(i);
     for (const auto& [c, members] : cells)
       for (std::size_t m = 1; m < members.size(); ++m) sets.join(members[m], members[0]);
-    for (const auto& [c, members] : cells) {
+    for (const auto& cell : cells) {
+      const GridCell& c = cell.first;  // named, not bound: lambdas may not capture bindings in C++17
+      const std::vector<std::size_t>& members = cell.second;
       UniformGrid::for_each_cell({{c.x - 2, c.y - 2, c.z - 2}, {c.x + 2, c.y + 2, c.z + 2}}, [&](const GridCell& near) {
         if (near == c) return;
         auto other = cells.find(near);
