@@ -27,7 +27,8 @@ void expect_alive(pb::Gatekeeper::Stub& stub) {
 }
 
 // A scene of n robot copies along x, 150 mm apart (neighbours clash), for audits that take a while.
-std::string robot_row(pb::Gatekeeper::Stub& stub, int n) {
+// spacing_mm 0: every copy at one pose (every pair clashes in every tile it spans).
+std::string robot_row(pb::Gatekeeper::Stub& stub, int n, double spacing_mm = 150.0) {
   const std::string rob = testing::upload_part_id(stub, testing::read_file(testing::shared_data("meshes/fcl/rob.obj")), "obj");
   grpc::ClientContext cctx;
   pb::SceneInfo scene;
@@ -39,7 +40,7 @@ std::string robot_row(pb::Gatekeeper::Stub& stub, int n) {
     o->set_part_id(rob);
     o->set_name("rob" + std::to_string(i));
     o->set_category("robot");
-    o->mutable_pose()->mutable_translation()->set_x_mm(150.0 * i);
+    o->mutable_pose()->mutable_translation()->set_x_mm(spacing_mm * i);
   }
   grpc::ClientContext pctx;
   pb::PutObjectsResponse ids;
@@ -553,21 +554,6 @@ TEST(HostileClientE2E, PartIdsAndNamesWithANulAreRefused) {
   expect_alive(*stub);
 }
 
-// A scene of n copies of FCL's robot at one pose (every pair clashes in every tile it spans).
-std::string stacked_robots(pb::Gatekeeper::Stub& stub, int n) {
-  const std::string rob = testing::upload_part_id(stub, testing::read_file(testing::shared_data("meshes/fcl/rob.obj")), "obj");
-  grpc::ClientContext cctx;
-  pb::SceneInfo scene;
-  EXPECT_TRUE(stub.CreateScene(&cctx, pb::CreateSceneRequest(), &scene).ok());
-  pb::PutObjectsRequest put;
-  put.set_scene_id(scene.scene_id());
-  for (int i = 0; i < n; ++i) put.add_objects()->set_part_id(rob);
-  grpc::ClientContext pctx;
-  pb::PutObjectsResponse ids;
-  EXPECT_TRUE(stub.PutObjects(&pctx, put, &ids).ok());
-  return scene.scene_id();
-}
-
 pb::AuditProgress audit_state(pb::Gatekeeper::Stub& stub, const std::string& job) {
   pb::GetAuditReportRequest get;
   get.set_job_id(job);
@@ -583,7 +569,7 @@ pb::AuditProgress audit_state(pb::Gatekeeper::Stub& stub, const std::string& job
 TEST(HostileClientE2E, AnAuditOfAMillionTilesStopsWhenCancelled) {
   Daemon daemon(testing::temp_dir("hostile-tiles-cancel"));
   auto stub = daemon.stub();
-  const std::string scene = stacked_robots(*stub, 40);
+  const std::string scene = robot_row(*stub, 40, 0.0);
   pb::StartAuditRequest start;
   start.set_scene_id(scene);
   start.set_tile_mm(1.2);
@@ -639,7 +625,7 @@ TEST(HostileClientE2E, SigtermDoesNotWaitForARunningAudit) {
 TEST(HostileClientE2E, ADeadlineStopsAMovesContacts) {
   Daemon daemon(testing::temp_dir("hostile-move-deadline"), {"--scene-workers", "1"});
   auto stub = daemon.stub();
-  const std::string crowded = stacked_robots(*stub, 3000);
+  const std::string crowded = robot_row(*stub, 3000, 0.0);
   pb::GetSceneRequest get;
   get.set_scene_id(crowded);
   pb::SceneInfo info;
@@ -655,7 +641,7 @@ TEST(HostileClientE2E, ADeadlineStopsAMovesContacts) {
     pb::MoveResult out;
     EXPECT_EQ(stub->MoveObject(&ctx, move, &out).error_code(), grpc::StatusCode::DEADLINE_EXCEEDED);
   }
-  const std::string small = stacked_robots(*stub, 2);
+  const std::string small = robot_row(*stub, 2, 0.0);
   pb::GetSceneRequest get_small;
   get_small.set_scene_id(small);
   pb::SceneInfo small_info;
