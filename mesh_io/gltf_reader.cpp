@@ -28,7 +28,7 @@ constexpr int kMaxNodeDepth = 256;                 // deeper node trees are malf
 // Instanced triangles (and vertices), at most: a small file instancing a mesh many times could otherwise ask for
 // more memory than the machine has (the reader holds about 130 bytes a triangle: 20 million
 // take about 2.6 GB, and about 40 s here).
-constexpr std::size_t kMaxTriangles = 20000000;
+constexpr std::size_t kMaxInstanced = 20000000;
 
 std::uint32_t read_u32(std::string_view bytes, std::size_t at) {
   std::uint32_t v = 0;
@@ -305,9 +305,9 @@ class GltfReader {
       // Both caps checked before anything is copied: primitives sharing one large accessor copy its
       // positions once each, and one strip or fan of small indices makes a triangle per index.
       const std::size_t triangles = mode == 4 ? idx.size() / 3 : (idx.size() >= 3 ? idx.size() - 2 : 0);
-      if (out_.vertices.size() + vertex_count > kMaxTriangles)
+      if (out_.vertices.size() + vertex_count > kMaxInstanced)
         return invalid_argument(pwhere, "more than 20 million vertices instanced");
-      if (out_.faces.size() + triangles > kMaxTriangles) return invalid_argument(pwhere, "more than 20 million triangles instanced");
+      if (out_.faces.size() + triangles > kMaxInstanced) return invalid_argument(pwhere, "more than 20 million triangles instanced");
       const auto base = static_cast<std::uint32_t>(out_.vertices.size());
       const std::vector<double>& pos = positions.value();
       for (std::size_t v = 0; v < vertex_count; ++v) {
@@ -327,7 +327,6 @@ class GltfReader {
       } else {  // fan
         for (std::size_t k = 1; k + 1 < idx.size(); ++k) add(idx[0], idx[k], idx[k + 1]);
       }
-      if (out_.faces.size() > kMaxTriangles) return invalid_argument(where, "more than 20 million triangles instanced");
     }
     return true;
   }
