@@ -18,12 +18,12 @@
 //   gatekeeper-cli audit-report JOB [--html report.html]
 // Exit status: 0 on OK, 1 on an RPC error (printed as JSON with its code), 2 on bad usage.
 #include "clients/channel_options.h"
+#include "clients/gatekeeper_client/upload.h"
 #include "gatekeeper/v1/gatekeeper.grpc.pb.h"
 
 #include <CLI/CLI.hpp>
 #include <google/protobuf/util/json_util.h>
 #include <grpcpp/grpcpp.h>
-#include <openssl/evp.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -61,18 +61,6 @@ bool parse(const std::string& json, Message* request) {
   return true;
 }
 
-std::string sha256_hex(const std::string& bytes) {
-  unsigned char out[EVP_MAX_MD_SIZE];
-  unsigned int n = 0;
-  EVP_Digest(bytes.data(), bytes.size(), out, &n, EVP_sha256(), nullptr);
-  std::string hex;
-  for (unsigned int i = 0; i < n; ++i) {
-    char b[3];
-    std::snprintf(b, sizeof b, "%02x", out[i]);
-    hex += b;
-  }
-  return hex;
-}
 
 }  // namespace
 
@@ -294,24 +282,11 @@ int main(int argc, char** argv) {
     std::stringstream buffer;
     buffer << in.rdbuf();
     const std::string bytes = buffer.str();
-    std::string format = std::filesystem::path(file).extension().string();
-    if (!format.empty()) format = format.substr(1);
-    for (char& c : format) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    gk::client::UploadOptions upload_options;
+    upload_options.format = gk::client::format_of(file);
+    upload_options.name = name.empty() ? std::filesystem::path(file).filename().string() : name;
     pb::PartInfo reply;
-    auto writer = stub->UploadPart(&ctx, &reply);
-    pb::UploadPartChunk header;
-    header.mutable_header()->set_name(name.empty() ? std::filesystem::path(file).filename().string() : name);
-    header.mutable_header()->set_format(format);
-    header.mutable_header()->set_size_bytes(bytes.size());
-    header.mutable_header()->set_sha256(sha256_hex(bytes));
-    writer->Write(header);
-    for (std::size_t at = 0; at < bytes.size(); at += 1u << 20) {
-      pb::UploadPartChunk chunk;
-      chunk.set_data(bytes.substr(at, 1u << 20));
-      if (!writer->Write(chunk)) break;
-    }
-    writer->WritesDone();
-    return print_reply(writer->Finish(), reply);
+    return print_reply(gk::client::upload_part(*stub, bytes, upload_options, &reply), reply);
   }
   return 2;
 }

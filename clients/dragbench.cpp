@@ -7,11 +7,11 @@
 //
 //   gatekeeper-dragbench --address 127.0.0.1:50051 [--objects 2000] [--frames 2000] [--clearance 50]
 #include "clients/channel_options.h"
+#include "clients/gatekeeper_client/upload.h"
 #include "gatekeeper/v1/gatekeeper.grpc.pb.h"
 
 #include <CLI/CLI.hpp>
 #include <grpcpp/grpcpp.h>
-#include <openssl/evp.h>
 
 #include <algorithm>
 #include <chrono>
@@ -35,18 +35,6 @@ std::string cube_obj() {
   return obj + "f 1 3 4\nf 1 4 2\nf 5 6 8\nf 5 8 7\nf 1 2 6\nf 1 6 5\nf 3 7 8\nf 3 8 4\nf 1 5 7\nf 1 7 3\nf 2 4 8\nf 2 8 6\n";
 }
 
-std::string sha256_hex(const std::string& bytes) {
-  unsigned char digest[32];
-  unsigned int n = 0;
-  EVP_Digest(bytes.data(), bytes.size(), digest, &n, EVP_sha256(), nullptr);
-  std::string hex;
-  char buf[3];
-  for (unsigned i = 0; i < n; ++i) {
-    std::snprintf(buf, sizeof buf, "%02x", digest[i]);
-    hex += buf;
-  }
-  return hex;
-}
 
 pb::Pose at(double x, double y) {
   pb::Pose p;
@@ -87,18 +75,9 @@ int main(int argc, char** argv) {
   const std::string bytes = cube_obj();
   pb::PartInfo cube;
   {
-    grpc::ClientContext ctx;
-    auto writer = stub->UploadPart(&ctx, &cube);
-    pb::UploadPartChunk header;
-    header.mutable_header()->set_format("obj");
-    header.mutable_header()->set_size_bytes(bytes.size());
-    header.mutable_header()->set_sha256(sha256_hex(bytes));
-    writer->Write(header);
-    pb::UploadPartChunk data;
-    data.set_data(bytes);
-    writer->Write(data);
-    writer->WritesDone();
-    if (!writer->Finish().ok()) return 1;
+    gk::client::UploadOptions upload_options;
+    upload_options.format = "obj";
+    if (!gk::client::upload_part(*stub, bytes, upload_options, &cube).ok()) return 1;
   }
   pb::SceneInfo scene;
   {

@@ -7,25 +7,12 @@
 #include <thread>
 
 namespace gk {
-namespace {
-
-void fnv(std::uint64_t& h, const void* data, std::size_t n) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  for (std::size_t i = 0; i < n; ++i) {
-    h ^= p[i];
-    h *= 1099511628211ULL;
-  }
-}
-
-}  // namespace
-
-std::uint64_t mesh_content_hash(const TriangleMesh& mesh) {
-  std::uint64_t h = 14695981039346656037ULL;
-  const std::uint64_t counts[2] = {mesh.vertices().size(), mesh.faces().size()};
-  fnv(h, counts, sizeof counts);
-  fnv(h, mesh.vertices().data(), mesh.vertices().size() * sizeof(Vec3));
-  fnv(h, mesh.faces().data(), mesh.faces().size() * sizeof(TriangleMesh::Face));
-  return h;
+Hash128 mesh_content_hash(const TriangleMesh& mesh) {
+  ContentHash h;
+  h.add(static_cast<std::uint64_t>(mesh.vertices().size())).add(static_cast<std::uint64_t>(mesh.faces().size()));
+  h.add_bytes(mesh.vertices().data(), mesh.vertices().size() * sizeof(Vec3));
+  h.add_bytes(mesh.faces().data(), mesh.faces().size() * sizeof(TriangleMesh::Face));
+  return h.value();
 }
 
 BvhCache::BvhCache(std::string directory) : directory_(std::move(directory)) {
@@ -35,9 +22,7 @@ BvhCache::BvhCache(std::string directory) : directory_(std::move(directory)) {
 
 Result<std::shared_ptr<MeshBvh>> BvhCache::get_or_build(std::shared_ptr<const TriangleMesh> mesh) {
   if (!mesh) return invalid_argument("mesh", "no mesh given");
-  char name[32];
-  std::snprintf(name, sizeof name, "%016llx.bvh", static_cast<unsigned long long>(mesh_content_hash(*mesh)));
-  const std::string path = directory_ + "/" + name;
+  const std::string path = directory_ + "/" + mesh_content_hash(*mesh).hex() + ".bvh";
   {
     std::ifstream in(path, std::ios::binary);
     if (in) {

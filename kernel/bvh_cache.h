@@ -3,6 +3,7 @@
 // place; a damaged or foreign file is ignored (and rebuilt over), never trusted.
 #pragma once
 
+#include "kernel/content_hash.h"
 #include "kernel/mesh_bvh.h"
 
 #include <atomic>
@@ -12,8 +13,9 @@
 
 namespace gk {
 
-// FNV-1a over the vertex coordinates and the face indices (and their counts).
-std::uint64_t mesh_content_hash(const TriangleMesh& mesh);
+// The content hash (kernel/content_hash.h) of the vertex coordinates and the face indices (and
+// their counts): the cache file's name.
+Hash128 mesh_content_hash(const TriangleMesh& mesh);
 
 class BvhCache {
  public:

@@ -3,13 +3,13 @@
 #include "kernel/exact_predicates.h"
 #include "kernel/point_containment.h"
 #include "kernel/triangle_intersection.h"
+#include "kernel/units.h"
 
 #include <cmath>
 
 namespace gk {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // Is the intersecting pair (ta, tb), both in A's frame and wound outward, a contact from outside?
 bool is_outside_contact(const Triangle& ta, const Triangle& tb, const Contact& c) {

@@ -2,6 +2,7 @@
 
 #include "kernel/bvh_ray.h"
 #include "kernel/exact_interference_volume.h"
+#include "kernel/units.h"
 
 #include <algorithm>
 #include <array>
@@ -202,7 +203,6 @@ Result<VolumeEstimate> interference_volume(const MeshBvh& a, const RigidTransfor
 
 double tessellation_band_volume(const TriangleMesh& mesh, const RigidTransform& pose, double band_mm, const Aabb& region) {
   if (!(band_mm > 0.0)) return 0.0;
-  constexpr double kPi = 3.14159265358979323846;
   const Aabb reach = region.expanded(band_mm);
   double total = 0.0;
   for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {

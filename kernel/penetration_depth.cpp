@@ -5,6 +5,7 @@
 #include "kernel/convexity.h"
 #include "kernel/mesh_collision.h"
 #include "kernel/mesh_distance.h"
+#include "kernel/units.h"
 
 #include <algorithm>
 #include <cmath>
@@ -14,7 +15,6 @@
 namespace gk {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kMaxPiecesPerMesh = 32;
 constexpr int kMaxPieceDirections = 48;
 // Larger meshes are decomposed only where the two boxes overlap (the rest cannot touch).

@@ -9,7 +9,8 @@
 namespace gk {
 
 // kStopped: the caller asked to stop (a deadline passed, the call was cancelled): no answer.
-enum class ErrorCode { kInvalidArgument, kNotFound, kFailedPrecondition, kInternal, kStopped };
+// kResourceExhausted: a bounded queue is full (retry later).
+enum class ErrorCode { kInvalidArgument, kNotFound, kFailedPrecondition, kInternal, kStopped, kResourceExhausted };
 
 struct Error {
   ErrorCode code = ErrorCode::kInvalidArgument;

@@ -1,5 +1,7 @@
 #include "mesh_io/mesh_file_reader.h"
 
+#include "kernel/content_hash.h"
+
 #include "mesh_io/format_readers.h"
 
 #include <algorithm>
@@ -35,14 +37,8 @@ Result<RawMesh> (*own_reader(const std::string& format))(std::string_view) {
 void merge_identical(RawMesh& mesh) {
   struct Hash {
     std::size_t operator()(const Vec3& v) const {
-      std::uint64_t h = 1469598103934665603ull;
-      for (int k = 0; k < 3; ++k) {
-        double c = v[k] == 0.0 ? 0.0 : v[k];  // -0 and +0 are one point
-        std::uint64_t bits;
-        std::memcpy(&bits, &c, sizeof bits);
-        h = (h ^ bits) * 1099511628211ull;
-      }
-      return static_cast<std::size_t>(h);
+      const double c[3] = {v[0] == 0.0 ? 0.0 : v[0], v[1] == 0.0 ? 0.0 : v[1], v[2] == 0.0 ? 0.0 : v[2]};  // -0 and +0 are one point
+      return static_cast<std::size_t>(hash_bytes64(c, sizeof c));
     }
   };
   std::unordered_map<Vec3, std::uint32_t, Hash> index;

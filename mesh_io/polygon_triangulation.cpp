@@ -1,6 +1,7 @@
 #include "mesh_io/polygon_triangulation.h"
 
 #include "kernel/exact_predicates.h"
+#include "kernel/units.h"
 
 #include <array>
 #include <cmath>
@@ -9,7 +10,6 @@
 namespace gk::mesh_io {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 struct Point2 {
   double x, y;

@@ -16,6 +16,8 @@ PACKAGES=(
   # OCCT's CMake targets link TBB (libtbb.so): without it ninja stops at gatekeeperd
   libtbb-dev
   libeigen3-dev
+  # the one content hash (kernel/content_hash.h): XXH3-128, header-only use
+  libxxhash-dev
   # the exact mesh volume (kernel/exact_interference_volume): CGAL's corefinement, header-only,
   # on GMP/MPFR rationals and Boost headers
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev
@@ -29,8 +31,8 @@ PACKAGES=(
   openssl
   # machine model files
   libtomlplusplus-dev
-  # python clients
-  python3 python3-grpcio python3-protobuf
+  # python clients: grpcio/protobuf at run time; pip, setuptools and wheel install clients/python offline
+  python3 python3-grpcio python3-protobuf python3-pip python3-setuptools python3-wheel
   # the audit report page: three.js from npm, checked in headless Chromium
   # (npm too: Debian packages it apart from nodejs; NodeSource's nodejs includes it and conflicts
   # with Debian's npm, so it is installed below only when the command is missing)

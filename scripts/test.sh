@@ -40,8 +40,8 @@ for stage in "${STAGES[@]}"; do
       echo "== scene audit and server structures under ThreadSanitizer"
       cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGATEKEEPER_SANITIZE_THREAD=ON \
         -DGATEKEEPER_BUILD_BENCHMARKS=OFF > /dev/null
-      cmake --build build-tsan -j "$JOBS" --target scene_audit_tests server_concurrency_tests
-      TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 ./build-tsan/tests/server_concurrency_tests --gtest_brief=1
+      cmake --build build-tsan -j "$JOBS" --target scene_audit_tests engine_concurrency_tests
+      TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 ./build-tsan/tests/engine_concurrency_tests --gtest_brief=1
       TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 ./build-tsan/tests/scene_audit_tests --gtest_brief=1
       ;;
     *)

@@ -3,7 +3,7 @@
 // stops is not kept.
 #pragma once
 
-#include "server/scene_queries.h"
+#include "server/engine_names.h"
 
 #include <memory>
 #include <string>
@@ -14,16 +14,16 @@ struct sqlite3;
 
 namespace gk::server {
 
-class AuditArchive {
+class AuditArchive final : public engine::EndedAudits {
  public:
   static Result<std::unique_ptr<AuditArchive>> open(const std::string& directory);
-  ~AuditArchive();
+  ~AuditArchive() override;
 
   // Stores the job with its final state.
-  Result<bool> save(const std::string& job_id, const AuditJob& job, const AuditSnapshot& final_state);
+  Result<bool> save(const std::string& job_id, const AuditJob& job, const AuditSnapshot& final_state) override;
   // One stored job, ended (NOT_FOUND when there is none). The daemon reads them on demand: ended
   // jobs beyond a few are not kept in memory (AuditJobs).
-  Result<std::shared_ptr<AuditJob>> load(const std::string& job_id) const;
+  Result<std::shared_ptr<AuditJob>> load(const std::string& job_id) const override;
 
  private:
   AuditArchive() = default;

@@ -1,5 +1,7 @@
 #include "server/audit_report.h"
 
+#include "engine/audits/audit_request.h"
+#include "engine/audits/clash_groups.h"
 #include "server/proto_convert.h"
 
 #include <algorithm>
@@ -9,22 +11,12 @@
 namespace gk::server {
 namespace {
 
-constexpr double kDefaultTileMm = 50000.0;
-constexpr double kRegionCellMm = 10000.0;  // clashes are grouped by 10 m floor cells
-constexpr int kMaxAuditThreads = 64;
-
-struct Count {
-  unsigned clashes = 0, collisions = 0;
-};
-
-void add_groups(const std::map<std::string, Count>& counts, google::protobuf::RepeatedPtrField<pb::ClashGroup>* out) {
-  std::vector<std::pair<std::string, Count>> sorted(counts.begin(), counts.end());
-  std::stable_sort(sorted.begin(), sorted.end(), [](const auto& l, const auto& r) { return l.second.clashes > r.second.clashes; });
-  for (const auto& [key, c] : sorted) {
-    pb::ClashGroup* g = out->Add();
-    g->set_key(key);
-    g->set_clashes(c.clashes);
-    g->set_collisions(c.collisions);
+void add_groups(const std::vector<engine::ClashGroup>& groups, google::protobuf::RepeatedPtrField<pb::ClashGroup>* out) {
+  for (const engine::ClashGroup& g : groups) {
+    pb::ClashGroup* p = out->Add();
+    p->set_key(g.key);
+    p->set_clashes(g.clashes);
+    p->set_collisions(g.collisions);
   }
 }
 
@@ -53,28 +45,19 @@ void progress_to_proto(const std::string& job_id, const AuditSnapshot& s, pb::Au
   out->set_tiles_done(s.tiles_done);
 }
 
-Result<AuditOptions> to_audit_options(const pb::StartAuditRequest& in, int default_threads) {
-  AuditOptions out;
-  if (!std::isfinite(in.clearance_mm()) || in.clearance_mm() < 0.0) return invalid_argument("clearance_mm", "must be a finite distance >= 0");
-  if (!std::isfinite(in.tile_mm()) || in.tile_mm() < 0.0) return invalid_argument("tile_mm", "must be a finite length >= 0");
-  if (in.threads() > kMaxAuditThreads) return invalid_argument("threads", "at most 64");
-  out.clearance_mm = in.clearance_mm();
-  out.tile_mm = in.tile_mm() > 0.0 ? in.tile_mm() : kDefaultTileMm;
-  out.threads = in.threads() > 0 ? static_cast<int>(in.threads()) : std::max(1, default_threads);
-  out.compute_depth = in.compute_depth();
-  out.compute_volume = in.compute_volume();
-  for (int i = 0; i < in.rules_size(); ++i) {
-    const pb::ContactRule& r = in.rules(i);
-    const std::string field = "rules[" + std::to_string(i) + "]";
-    if (r.category_a().empty()) return invalid_argument(field + ".category_a", "is empty (use \"*\" for any)");
-    if (r.category_b().empty()) return invalid_argument(field + ".category_b", "is empty (use \"*\" for any)");
-    out.rules.push_back({r.name(), r.category_a(), r.category_b(), r.same_group_only()});
-  }
-  return out;
+Result<AuditOptions> to_audit_options(const pb::StartAuditRequest& in) {
+  AuditOptions asked;
+  asked.clearance_mm = in.clearance_mm();
+  asked.tile_mm = in.tile_mm();
+  // Beyond the engine's limit stays beyond it (it names the field), never wraps.
+  asked.threads = static_cast<int>(std::min<std::uint32_t>(in.threads(), static_cast<std::uint32_t>(engine::kMaxAuditThreads) + 1));
+  asked.compute_depth = in.compute_depth();
+  asked.compute_volume = in.compute_volume();
+  for (const pb::ContactRule& r : in.rules()) asked.rules.push_back({r.name(), r.category_a(), r.category_b(), r.same_group_only()});
+  return asked;
 }
 
 void report_to_proto(const AuditSnapshot& snapshot, pb::AuditReport* out) {
-  std::map<std::string, Count> by_object, by_category, by_region;
   for (const ClashRecord& r : snapshot.clashes) {
     const PairClash& c = r.clash;
     pb::Clash* p = out->add_clashes();
@@ -105,22 +88,11 @@ void report_to_proto(const AuditSnapshot& snapshot, pb::AuditReport* out) {
       q->set_contact_pairs(region.contacts);
       q->set_min_distance_mm(region.min_distance_mm);
     }
-    const unsigned collision = c.verdict == Verdict::kCollision ? 1u : 0u;
-    for (const std::string* id : {&r.a, &r.b}) {
-      by_object[*id].clashes += 1;
-      by_object[*id].collisions += collision;
-    }
-    const std::string cats = std::min(r.category_a, r.category_b) + " / " + std::max(r.category_a, r.category_b);
-    by_category[cats].clashes += 1;
-    by_category[cats].collisions += collision;
-    const std::string cell = std::to_string(static_cast<long long>(std::floor(c.point_a.x() / kRegionCellMm))) + "," +
-                             std::to_string(static_cast<long long>(std::floor(c.point_a.y() / kRegionCellMm)));
-    by_region[cell].clashes += 1;
-    by_region[cell].collisions += collision;
   }
-  add_groups(by_object, out->mutable_by_object());
-  add_groups(by_category, out->mutable_by_category());
-  add_groups(by_region, out->mutable_by_region());
+  const engine::ClashGroups groups = engine::group_clashes(snapshot.clashes);
+  add_groups(groups.by_object, out->mutable_by_object());
+  add_groups(groups.by_category, out->mutable_by_category());
+  add_groups(groups.by_region, out->mutable_by_region());
   out->set_candidate_pairs(snapshot.candidate_pairs);
   out->set_excluded_by_rules(snapshot.excluded_by_rules);
   out->set_objects(snapshot.objects);

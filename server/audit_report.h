@@ -3,14 +3,14 @@
 #pragma once
 
 #include "gatekeeper/v1/gatekeeper.pb.h"
-#include "server/scene_queries.h"
+#include "server/engine_names.h"
 
 namespace gk::server {
 
 namespace pb = ::gatekeeper::v1;
 
-// default_threads replaces threads = 0; tile_mm = 0 becomes 50 m.
-Result<AuditOptions> to_audit_options(const pb::StartAuditRequest& in, int default_threads);
+// The request as asked (the engine checks it and fills in the defaults).
+Result<AuditOptions> to_audit_options(const pb::StartAuditRequest& in);
 
 void progress_to_proto(const std::string& job_id, const AuditSnapshot& s, pb::AuditProgress* out);
 

@@ -4,7 +4,7 @@
 #pragma once
 
 #include "gatekeeper/v1/gatekeeper.pb.h"
-#include "server/scene_queries.h"
+#include "server/engine_names.h"
 
 #include <string>
 #include <vector>

@@ -1,12 +1,9 @@
 #include "server/gatekeeper_service.h"
 
 #include "server/access_control.h"
-#include "server/clearance_query.h"
 #include "server/proto_convert.h"
 #include "server/rpc_helpers.h"
 
-#include <google/protobuf/io/coded_stream.h>
-#include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -59,8 +56,7 @@ class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> 
     if (!upload_) {
       if (!chunk_.has_header()) return fail(invalid_argument("header", "the first message must carry the header"));
       const pb::UploadHeader& h = chunk_.header();
-      if (auto bad = check_label(h.name(), "header.name"); !bad.ok()) return fail(bad.error());
-      auto begun = service_.parts().store().begin(h.name(), h.format(), h.size_bytes(), h.sha256());
+      auto begun = service_.engine().begin_upload(h.name(), h.format(), h.size_bytes(), h.sha256());
       if (!begun.ok()) return fail(begun.error());
       upload_ = std::move(begun.value());
     } else {
@@ -91,7 +87,7 @@ class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> 
     auto* self = this;
     // CAD files are read in a child that may take up to --cad-check-seconds: on their own pool, so
     // that a file that keeps the reader busy never holds up mesh uploads.
-    WorkPool& pool = is_cad_format(upload_->format()) ? service_.cad_upload_pool() : service_.upload_pool();
+    WorkPool& pool = engine::is_cad_format(upload_->format()) ? service_.cad_upload_pool() : service_.upload_pool();
     const bool queued = pool.try_submit([self] {
       const grpc::Status status = guarded_status("UploadPart", [&]() -> grpc::Status {
         return self->finish_upload();
@@ -103,24 +99,10 @@ class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> 
 
   // On a worker: reads the upload (the mesh it describes) and records it.
   grpc::Status finish_upload() {
-    auto* self = this;
-    {
-      auto record = self->service_.parts().store().finish(
-          std::move(self->upload_), [](const std::string& path, PartRecord r) -> Result<PartRecord> {
-            auto mesh = PartRegistry::read_any(path, r.format, kPartDeflectionMm);
-            if (!mesh.ok()) return mesh.error();
-            r.triangles = static_cast<std::uint32_t>(mesh.value().triangle_count());
-            r.bounds_min = mesh.value().bounds().min;
-            r.bounds_max = mesh.value().bounds().max;
-            r.closed = mesh.value().is_closed_oriented();
-            return r;
-          });
-      if (!record.ok()) return to_status(record.error());
-      to_proto(record.value(), self->reply_);
-      spdlog::info("stored part {} ({} bytes, {} triangles)", record.value().id, record.value().size_bytes,
-                   record.value().triangles);
-      return grpc::Status::OK;
-    }
+    auto record = service_.engine().finish_upload(std::move(upload_));
+    if (!record.ok()) return to_status(record.error());
+    to_proto(record.value(), reply_);
+    return grpc::Status::OK;
   }
 
   GatekeeperService& service_;
@@ -134,10 +116,8 @@ class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> 
 
 }  // namespace
 
-GatekeeperService::GatekeeperService(MachineRegistry& machines, PartRegistry& parts, SceneStore& scenes, AuditArchive* archive,
-                                     ServiceOptions options)
-    : machines_(machines), parts_(parts), scenes_(scenes), audits_(archive, options.ended_audits_in_memory), archive_(archive),
-      options_(options),
+GatekeeperService::GatekeeperService(Engine& engine, ServiceOptions options)
+    : engine_(engine), options_(options),
       validation_pool_(options.validation_workers, static_cast<std::size_t>(options.max_validations_in_flight)),
       part_validation_pool_(options.part_validation_workers, static_cast<std::size_t>(options.max_validations_in_flight)),
       scene_pool_(options.scene_workers, options.max_queued),
@@ -145,7 +125,6 @@ GatekeeperService::GatekeeperService(MachineRegistry& machines, PartRegistry& pa
       pool_(options.workers, options.max_queued),
       upload_pool_(options.upload_workers, options.max_queued),
       cad_upload_pool_(options.upload_workers, options.max_queued),
-      audit_pool_(options.audit_jobs, options.audit_queue),
       upload_slots_(options.max_open_uploads, options.upload_idle_limit) {
 }
 
@@ -153,89 +132,11 @@ GatekeeperService::~GatekeeperService() { stop_work(); }
 
 grpc::Status GatekeeperService::validate_one(const pb::ValidateStepRequest& request, const pb::SheetPart* default_part,
                                              const std::string& default_machine, pb::ValidateStepResponse* response) {
-  // Nothing a request carries may escape as an exception: it becomes INTERNAL with what happened.
-  try {
-    return validate_one_unguarded(request, default_part, default_machine, response);
-  } catch (const std::exception& e) {
-    spdlog::error("ValidateStep: unexpected exception: {}", e.what());
-    return {grpc::StatusCode::INTERNAL, std::string("ValidateStep failed: ") + e.what()};
-  } catch (...) {
-    spdlog::error("ValidateStep: unexpected non-standard exception");
-    return {grpc::StatusCode::INTERNAL, "ValidateStep failed: unexpected error"};
-  }
-}
-
-// The exact question: request bytes, the part used, the machine, its model version, and the
-// machine's current state when the request carries none.
-std::string GatekeeperService::answer_key(const pb::ValidateStepRequest& request, const pb::SheetPart& part_msg,
-                                          const MachineSnapshot& snapshot) {
-  std::string key;
-  {
-    google::protobuf::io::StringOutputStream out(&key);
-    google::protobuf::io::CodedOutputStream coded(&out);
-    coded.SetSerializationDeterministic(true);
-    request.SerializeToCodedStream(&coded);
-    part_msg.SerializeToCodedStream(&coded);
-  }
-  key += "|" + snapshot.id + "|" + std::to_string(snapshot.version);
-  if (!request.has_state()) key += "|" + std::to_string(snapshot.state.hash());
-  return key;
-}
-
-bool GatekeeperService::answer_from_cache(const std::string& key, Clock::time_point t0, pb::ValidateStepResponse* response) {
-  auto hit = answers_.find(key);
-  if (!hit) return false;
-  *response = *hit;
-  response->set_decided_by("cache");
-  pb::StageTimes* times = response->mutable_times();
-  times->Clear();
-  times->set_cache_us(us_since(t0));
-  times->set_total_us(times->cache_us());
-  return true;
-}
-
-bool GatekeeperService::answered_from_cache(const pb::ValidateStepRequest& request, pb::ValidateStepResponse* response) {
-  // On a callback thread: nothing may escape. Any trouble leaves the question to the worker.
-  try {
-    const auto t0 = Clock::now();
-    auto snapshot = machines_.get(request.machine_id());
-    if (!snapshot.ok()) return false;  // the worker answers the error
-    return answer_from_cache(answer_key(request, request.part(), snapshot.value()), t0, response);
-  } catch (...) {
-    response->Clear();
-    return false;
-  }
-}
-
-grpc::Status GatekeeperService::validate_one_unguarded(const pb::ValidateStepRequest& request, const pb::SheetPart* default_part,
-                                                       const std::string& default_machine, pb::ValidateStepResponse* response) {
-  const auto t0 = Clock::now();
-  const std::string machine = request.machine_id().empty() ? default_machine : request.machine_id();
-  auto snapshot = machines_.get(machine);
-  if (!snapshot.ok()) return to_status(snapshot.error());
-  const pb::SheetPart& part_msg = request.has_part() || !default_part ? request.part() : *default_part;
-  const std::string key = answer_key(request, part_msg, snapshot.value());
-  if (answer_from_cache(key, t0, response)) return grpc::Status::OK;
-  auto part = to_part(part_msg, parts_);
-  if (!part.ok()) return to_status(part.error());
-  auto step = to_step(request.step());
-  if (!step.ok()) return to_status(step.error());
-  if (auto valid = p4::validate_step(snapshot.value().model, step.value()); !valid.ok())
-    return to_status(invalid_argument("step." + valid.error().field, valid.error().message));
-  p4::MachineState state;
-  const p4::MachineState* state_ptr = nullptr;
-  if (request.has_state()) {
-    auto s = to_state(request.state(), snapshot.value().model);
-    if (!s.ok()) return to_status(s.error());
-    state = s.value();
-    state_ptr = &state;
-  }
-  auto validator = machines_.validator(machine, state_ptr);
-  if (!validator.ok()) return to_status(validator.error());
-  auto answer = validator.value()->validate(part.value(), step.value(), !request.skip_corrections());
-  if (!answer.ok()) return to_status(answer.error());
-  to_proto(answer.value(), response);
-  answers_.store(key, *response);
+  auto question = to_question(request, default_part, default_machine);
+  if (!question.ok()) return to_status(question.error());
+  auto reply = engine_.steps().validate(question.value());
+  if (!reply.ok()) return to_status(reply.error());
+  to_proto(reply.value().answer, response);
   return grpc::Status::OK;
 }
 
@@ -246,7 +147,22 @@ grpc::ServerUnaryReactor* GatekeeperService::ValidateStep(grpc::CallbackServerCo
                                                           const pb::ValidateStepRequest* request,
                                                           pb::ValidateStepResponse* response) {
   const auto t0 = Clock::now();
-  if (answered_from_cache(*request, response)) return finish(ctx, stats_, "ValidateStep", t0, grpc::Status::OK);
+  // A repeated question is answered here, on the callback thread, from the engine's cache (any
+  // trouble, even an exception, leaves it to a worker, which answers the error).
+  const bool answered = [&] {
+    try {
+      auto question = to_question(*request, nullptr, "");
+      if (!question.ok()) return false;
+      auto hit = engine_.steps().cached(question.value());
+      if (!hit) return false;
+      to_proto(hit->answer, response);
+      return true;
+    } catch (...) {
+      response->Clear();
+      return false;
+    }
+  }();
+  if (answered) return finish(ctx, stats_, "ValidateStep", t0, grpc::Status::OK);
   return run_queued(request->part().part_id().empty() ? validation_pool_ : part_validation_pool_, stats_, ctx, "ValidateStep",
                     request, response, [this](const pb::ValidateStepRequest& r, pb::ValidateStepResponse* out) {
                       return validate_one(r, nullptr, "", out);
@@ -277,11 +193,6 @@ grpc::ServerUnaryReactor* GatekeeperService::ValidateSteps(grpc::CallbackServerC
   });
 }
 
-grpc::Status GatekeeperService::clearance(const pb::ClearanceQueryRequest& request, const StopToken& stop,
-                                          pb::ClearanceQueryResponse* response) {
-  return answer_clearance(request, parts_, scenes_, stop, response);
-}
-
 grpc::ServerUnaryReactor* GatekeeperService::ClearanceQuery(grpc::CallbackServerContext* ctx,
                                                             const pb::ClearanceQueryRequest* request,
                                                             pb::ClearanceQueryResponse* response) {
@@ -293,7 +204,14 @@ grpc::ServerUnaryReactor* GatekeeperService::ClearanceQuery(grpc::CallbackServer
     else if (past_deadline(ctx)) status = {grpc::StatusCode::DEADLINE_EXCEEDED, "deadline passed while queued"};
     else {
       const StopToken stop([ctx] { return ctx->IsCancelled() || past_deadline(ctx); });
-      status = guarded_status("ClearanceQuery", [&] { return clearance(*request, stop, response); });
+      status = guarded_status("ClearanceQuery", [&]() -> grpc::Status {
+        auto asked = to_clearance_request(*request);
+        if (!asked.ok()) return to_status(asked.error());
+        auto answer = engine_.clearance(asked.value(), stop);
+        if (!answer.ok()) return to_status(answer.error());
+        to_proto(answer.value(), response);
+        return grpc::Status::OK;
+      });
     }
     stats_.record("ClearanceQuery", us_since(t0), !status.ok());
     reactor->Finish(status);
@@ -317,31 +235,29 @@ grpc::ServerReadReactor<pb::UploadPartChunk>* GatekeeperService::UploadPart(grpc
 grpc::ServerUnaryReactor* GatekeeperService::GetPartInfo(grpc::CallbackServerContext* ctx, const pb::GetPartInfoRequest* request,
                                                          pb::PartInfo* response) {
   return unary(ctx, stats_, "GetPartInfo", [&]() -> grpc::Status {
-    auto record = parts_.store().get(request->part_id());
+    auto record = engine_.part(request->part_id());
     if (!record.ok()) return grpc::Status(to_status(record.error()));
     to_proto(record.value(), response);
     return grpc::Status(grpc::Status::OK);
   });
 }
 
-grpc::Status GatekeeperService::machine_info(const std::string& id, pb::MachineInfo* response) {
-  auto m = machines_.get(id);
-  if (!m.ok()) return to_status(m.error());
-  response->set_machine_id(m.value().id);
-  response->set_name(m.value().model.name);
-  response->set_aba_segments(static_cast<std::uint32_t>(m.value().model.aba.segment_widths_mm.size()));
-  response->set_max_bend_length_mm(m.value().model.max_bend_length_mm);
-  response->set_max_bend_angle_deg(m.value().model.max_bend_angle_deg);
-  to_proto(m.value().state, response->mutable_state());
-  response->set_model_toml(m.value().model_toml);
+grpc::Status GatekeeperService::machine_info(const MachineSnapshot& m, pb::MachineInfo* response) {
+  response->set_machine_id(m.id);
+  response->set_name(m.model.name);
+  response->set_aba_segments(static_cast<std::uint32_t>(m.model.aba.segment_widths_mm.size()));
+  response->set_max_bend_length_mm(m.model.max_bend_length_mm);
+  response->set_max_bend_angle_deg(m.model.max_bend_angle_deg);
+  to_proto(m.state, response->mutable_state());
+  response->set_model_toml(m.model_toml);
   return grpc::Status::OK;
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::ListMachines(grpc::CallbackServerContext* ctx, const pb::ListMachinesRequest*,
                                                           pb::ListMachinesResponse* response) {
   return unary(ctx, stats_, "ListMachines", [&]() -> grpc::Status {
-    for (const MachineSnapshot& m : machines_.list()) {
-      grpc::Status s = machine_info(m.id, response->add_machines());
+    for (const MachineSnapshot& m : engine_.machines()) {
+      grpc::Status s = machine_info(m, response->add_machines());
       if (!s.ok()) return grpc::Status(s);
     }
     return grpc::Status(grpc::Status::OK);
@@ -351,7 +267,9 @@ grpc::ServerUnaryReactor* GatekeeperService::ListMachines(grpc::CallbackServerCo
 grpc::ServerUnaryReactor* GatekeeperService::GetMachine(grpc::CallbackServerContext* ctx, const pb::GetMachineRequest* request,
                                                         pb::MachineInfo* response) {
   return unary(ctx, stats_, "GetMachine", [&]() -> grpc::Status {
-    return grpc::Status(machine_info(request->machine_id(), response));
+    auto m = engine_.machine(request->machine_id());
+    if (!m.ok()) return grpc::Status(to_status(m.error()));
+    return grpc::Status(machine_info(m.value(), response));
   });
 }
 
@@ -359,13 +277,9 @@ grpc::ServerUnaryReactor* GatekeeperService::SetMachineState(grpc::CallbackServe
                                                              const pb::SetMachineStateRequest* request, pb::MachineInfo* response) {
   return unary(ctx, stats_, "SetMachineState", [&]() -> grpc::Status {
     if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
-    auto m = machines_.get(request->machine_id());
-    if (!m.ok()) return grpc::Status(to_status(m.error()));
-    auto state = to_state(request->state(), m.value().model);
-    if (!state.ok()) return grpc::Status(to_status(state.error()));
-    auto set = machines_.set_state(request->machine_id(), state.value());
+    auto set = engine_.set_machine_state(request->machine_id(), to_state(request->state()));
     if (!set.ok()) return grpc::Status(to_status(set.error()));
-    return grpc::Status(machine_info(request->machine_id(), response));
+    return grpc::Status(machine_info(set.value(), response));
   });
 }
 
@@ -374,10 +288,9 @@ grpc::ServerUnaryReactor* GatekeeperService::PutMachineModel(grpc::CallbackServe
   return run_queued(record_pool_, stats_, ctx, "PutMachineModel", request, response,
                     [this, ctx](const pb::PutMachineModelRequest& put, pb::MachineInfo* out) -> grpc::Status {
     if (auto allowed = require_role(ctx, Role::kAdmin); !allowed.ok()) return allowed;
-    if (auto bad = check_id(put.machine_id(), "machine_id"); !bad.ok()) return to_status(bad.error());
-    auto stored = machines_.put_model(put.machine_id(), put.model_toml());
+    auto stored = engine_.put_machine_model(put.machine_id(), put.model_toml());
     if (!stored.ok()) return grpc::Status(to_status(stored.error()));
-    return grpc::Status(machine_info(put.machine_id(), out));
+    return grpc::Status(machine_info(stored.value(), out));
   });
 }
 
@@ -385,7 +298,7 @@ grpc::ServerUnaryReactor* GatekeeperService::GetServerInfo(grpc::CallbackServerC
                                                            pb::ServerInfo* response) {
   return unary(ctx, stats_, "GetServerInfo", [&]() -> grpc::Status {
     response->set_version(options_.version);
-    for (const MachineSnapshot& m : machines_.list()) response->add_machines(m.id);
+    for (const MachineSnapshot& m : engine_.machines()) response->add_machines(m.id);
     for (const RpcStats::Summary& s : stats_.summaries()) {
       pb::RpcStats* r = response->add_rpcs();
       r->set_method(s.method);
@@ -398,12 +311,12 @@ grpc::ServerUnaryReactor* GatekeeperService::GetServerInfo(grpc::CallbackServerC
         r->add_histogram_counts(s.histogram[b]);
       }
     }
-    response->set_parts_stored(parts_.store().count());
-    const PartRegistry::MemoryStats memory = parts_.memory_stats();
+    response->set_parts_stored(engine_.parts_stored());
+    const engine::PartRegistry::MemoryStats memory = engine_.part_memory();
     response->set_parts_in_memory(memory.parts);
     response->set_part_memory_bytes(memory.bytes);
     response->set_parts_evicted(memory.evicted);
-    response->set_audits_in_memory(audits_.in_memory());
+    response->set_audits_in_memory(engine_.audits().in_memory());
     return grpc::Status(grpc::Status::OK);
   });
 }

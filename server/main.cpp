@@ -13,8 +13,10 @@
 // Starts with the embedded default P4 machine model; health (grpc.health.v1) and reflection
 // (v1alpha) are served; SIGTERM or SIGINT shut it down gracefully (health NOT_SERVING, in-flight
 // calls get --drain-seconds to finish, workers join, storage closes).
+#include "engine/gatekeeper_engine.h"
+#include "engine/parts/cad_sandbox.h"
 #include "server/access_control.h"
-#include "server/cad_sandbox.h"
+#include "server/audit_archive.h"
 #include "server/gatekeeper_service.h"
 
 #include <CLI/CLI.hpp>
@@ -81,7 +83,7 @@ bool apply_config_file(const std::string& path, Config& c, const CLI::App& app) 
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc > 1 && std::string(argv[1]) == "--check-cad") return gk::server::run_cad_check(argc, argv);
+  if (argc > 1 && std::string(argv[1]) == "--check-cad") return gk::engine::run_cad_check(argc, argv);
   Config config;
   std::string config_file;
   CLI::App app{"gatekeeperd: decides, before a machine moves, whether the move is physically possible"};
@@ -135,11 +137,11 @@ int main(int argc, char** argv) {
       spdlog::error("cannot find this program's path (/proc/self/exe) to read CAD files in a child: {}", ec.message());
       return 1;
     }
-    gk::server::CadSandbox sandbox;
+    gk::engine::CadSandbox sandbox;
     sandbox.executable = self.string();
     sandbox.timeout = std::chrono::seconds(config.cad_check_seconds);
     sandbox.memory_bytes = static_cast<std::uint64_t>(config.cad_check_memory_gb * 1073741824.0);
-    gk::server::set_cad_sandbox(sandbox);
+    gk::engine::set_cad_sandbox(sandbox);
   }
   spdlog::set_level(spdlog::level::from_str(config.log_level));
 
@@ -171,32 +173,29 @@ int main(int argc, char** argv) {
     }
   }
 
-  auto store = gk::server::PartStore::open(config.data_dir);
+  auto store = gk::engine::PartStore::open(config.data_dir);
   if (!store.ok()) {
     spdlog::error("{}", store.error().to_string());
     return 1;
   }
-  gk::server::PartRegistry parts(*store.value(), config.data_dir + "/bvh-cache",
+  gk::engine::PartRegistry parts(*store.value(), config.data_dir + "/bvh-cache",
                                  static_cast<std::size_t>(config.part_memory_gb * 1073741824.0));
-  auto machines = gk::server::MachineRegistry::create(config.data_dir + "/machines");
+  auto machines = gk::engine::MachineRegistry::create(config.data_dir + "/machines");
   if (!machines.ok()) {
     spdlog::error("default machine model: {}", machines.error().to_string());
     return 1;
   }
   gk::server::ServiceOptions options;
   options.workers = config.workers;
-  options.audit_threads = config.workers;
   options.max_queued = static_cast<std::size_t>(config.queue);
-  options.audit_jobs = config.audit_jobs;
   options.validation_workers = config.validation_workers;
   options.part_validation_workers = config.part_validation_workers;
   options.upload_workers = config.upload_workers;
   options.scene_workers = config.scene_workers;
   options.record_workers = config.record_workers;
-  options.ended_audits_in_memory = static_cast<std::size_t>(config.audits_in_memory);
   options.max_open_uploads = static_cast<std::size_t>(config.max_uploads);
   options.upload_idle_limit = std::chrono::milliseconds(static_cast<long long>(config.upload_idle_seconds * 1000.0));
-  auto scenes = gk::server::SceneStore::open(config.data_dir);
+  auto scenes = gk::engine::SceneStore::open(config.data_dir);
   if (!scenes.ok()) {
     spdlog::error("{}", scenes.error().to_string());
     return 1;
@@ -206,7 +205,12 @@ int main(int argc, char** argv) {
     spdlog::error("{}", archive.error().to_string());
     return 1;
   }
-  gk::server::GatekeeperService service(*machines.value(), parts, *scenes.value(), archive.value().get(), options);
+  gk::engine::EngineOptions engine_options;
+  engine_options.audit_threads = config.workers;
+  engine_options.audits.concurrent = config.audit_jobs;
+  engine_options.audits.ended_in_memory = static_cast<std::size_t>(config.audits_in_memory);
+  gk::engine::Engine engine(*machines.value(), parts, *scenes.value(), archive.value().get(), engine_options);
+  gk::server::GatekeeperService service(engine, options);
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
@@ -221,7 +225,7 @@ int main(int argc, char** argv) {
   }
   server->GetHealthCheckService()->SetServingStatus(true);
   spdlog::info("gatekeeperd serving on port {} (data in {}, machine {})", port, config.data_dir,
-               gk::server::MachineRegistry::kDefaultMachine);
+               gk::engine::MachineRegistry::kDefaultMachine);
   if (!config.port_file.empty()) {
     std::ofstream(config.port_file + ".tmp") << port << "\n";
     std::rename((config.port_file + ".tmp").c_str(), config.port_file.c_str());

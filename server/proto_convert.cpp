@@ -1,14 +1,15 @@
 #include "server/proto_convert.h"
 
 #include "kernel/tolerances.h"
+#include "kernel/units.h"
 
 #include <cctype>
 #include <cmath>
+#include <tuple>
 
 namespace gk::server {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 Result<bool> finite(double v, const std::string& field) {
   if (!std::isfinite(v)) return invalid_argument(field, "must be a finite number");
@@ -25,6 +26,7 @@ grpc::Status to_status(const Error& error) {
     case ErrorCode::kFailedPrecondition: return {grpc::StatusCode::FAILED_PRECONDITION, message};
     case ErrorCode::kInternal: return {grpc::StatusCode::INTERNAL, message};
     case ErrorCode::kStopped: return {grpc::StatusCode::DEADLINE_EXCEEDED, message};
+    case ErrorCode::kResourceExhausted: return {grpc::StatusCode::RESOURCE_EXHAUSTED, message};
   }
   return {grpc::StatusCode::INTERNAL, message};
 }
@@ -57,7 +59,7 @@ Result<p4::BendStep> to_step(const pb::Step& in) {
   return s;
 }
 
-Result<p4::MachineState> to_state(const pb::MachineState& in, const p4::MachineModel& model) {
+p4::MachineState to_state(const pb::MachineState& in) {
   p4::MachineState s;
   s.engaged_segments.assign(in.engaged_segments().begin(), in.engaged_segments().end());
   s.clamp_z_mm = in.clamp_z_mm();
@@ -65,23 +67,32 @@ Result<p4::MachineState> to_state(const pb::MachineState& in, const p4::MachineM
   s.manipulator_y_mm = in.manipulator_y_mm();
   s.manipulator_rotation_deg = in.manipulator_rotation_deg();
   s.lower_blade_z_offset_mm = in.lower_blade_z_offset_mm();
-  auto valid = p4::validate_state(model, s);
-  if (!valid.ok()) return invalid_argument("state." + valid.error().field, valid.error().message);
   return s;
 }
 
-Result<p4::SheetPart> to_part(const pb::SheetPart& in, PartRegistry& parts) {
-  if (!(in.deflection_mm() >= 0.0) || !(in.deflection_mm() <= 1000.0))
-    return invalid_argument("part.deflection_mm", "must be in [0, 1000] mm (0: the default)");
-  if (!in.part_id().empty()) {
-    const double deflection = in.deflection_mm() > 0.0 ? in.deflection_mm() : kPartDeflectionMm;
-    auto loaded = parts.load(in.part_id(), deflection);
-    if (!loaded.ok()) return Error{loaded.error().code, "part.part_id", loaded.error().message};
-    auto part = p4::SheetPart::from_surface(*loaded.value()->mesh, in.thickness_mm(), loaded.value()->deflection_mm);
-    if (!part.ok()) return invalid_argument("part." + part.error().field, part.error().message);
-    return part;
-  }
-  p4::SheetPartSpec spec{in.width_mm(), in.depth_mm(), in.thickness_mm(), {}, {}};
+Result<engine::StepQuestion> to_question(const pb::ValidateStepRequest& request, const pb::SheetPart* default_part,
+                                         const std::string& default_machine) {
+  engine::StepQuestion q;
+  q.machine_id = request.machine_id().empty() ? default_machine : request.machine_id();
+  auto part = to_step_part(request.has_part() || !default_part ? request.part() : *default_part);
+  if (!part.ok()) return part.error();
+  q.part = std::move(part).value();
+  auto step = to_step(request.step());
+  if (!step.ok()) return step.error();
+  q.step = step.value();
+  if (request.has_state()) q.state = to_state(request.state());
+  q.with_corrections = !request.skip_corrections();
+  return q;
+}
+
+Result<engine::StepPart> to_step_part(const pb::SheetPart& in) {
+  engine::StepPart out;
+  out.part_id = in.part_id();
+  out.deflection_mm = in.deflection_mm();
+  out.spec.thickness_mm = in.thickness_mm();
+  if (!in.part_id().empty()) return out;
+  out.spec.width_mm = in.width_mm();
+  out.spec.depth_mm = in.depth_mm();
   for (const pb::Flange& f : in.flanges()) {
     p4::Side side;
     switch (f.side()) {
@@ -91,12 +102,10 @@ Result<p4::SheetPart> to_part(const pb::SheetPart& in, PartRegistry& parts) {
       case pb::Y_MAX: side = p4::Side::kYMax; break;
       default: return invalid_argument("part.flanges.side", "missing or unknown side");
     }
-    spec.flanges.push_back({side, f.height_mm(), f.angle_deg(), f.start_mm(), f.length_mm()});
+    out.spec.flanges.push_back({side, f.height_mm(), f.angle_deg(), f.start_mm(), f.length_mm()});
   }
-  for (const pb::Tab& t : in.tabs()) spec.tabs.push_back({t.x_min_mm(), t.x_max_mm(), t.y_mm(), t.height_mm()});
-  auto part = p4::SheetPart::create(spec);
-  if (!part.ok()) return invalid_argument("part." + part.error().field, part.error().message);
-  return part;
+  for (const pb::Tab& t : in.tabs()) out.spec.tabs.push_back({t.x_min_mm(), t.x_max_mm(), t.y_mm(), t.height_mm()});
+  return out;
 }
 
 Result<RigidTransform> to_pose(const pb::Pose& in, const std::string& field) {
@@ -113,32 +122,6 @@ Result<RigidTransform> to_pose(const pb::Pose& in, const std::string& field) {
   const RigidTransform pose = RigidTransform::from_axis_angle(axis / largest, in.rotation_deg() * kPi / 180.0, t);
   if (!pose.is_rigid()) return invalid_argument(field + ".rotation_axis", "does not give a rigid rotation");
   return pose;
-}
-
-Result<bool> check_id(const std::string& id, const std::string& field) {
-  if (id.empty() || id.size() > kMaxIdLength)
-    return invalid_argument(field, "must be 1 to " + std::to_string(kMaxIdLength) + " characters");
-  for (char c : id)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.' || c == ':'))
-      return invalid_argument(field, "may hold only letters, digits and - _ . :");
-  return true;
-}
-
-Result<bool> check_label(const std::string& text, const std::string& field) {
-  if (text.size() > kMaxLabelLength) return invalid_argument(field, "longer than " + std::to_string(kMaxLabelLength) + " bytes");
-  const auto byte = [&](std::size_t i) { return i < text.size() ? static_cast<unsigned char>(text[i]) : 0u; };
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    const unsigned c = byte(i);
-    // C0 controls and DEL; in UTF-8 the C1 controls (U+0080-U+009F), the line and paragraph
-    // separators (U+2028, U+2029) and the bidirectional overrides and isolates (U+202A-U+202E,
-    // U+2066-U+2069), which make a name read differently from what it holds.
-    const bool c1 = c == 0xC2 && byte(i + 1) >= 0x80 && byte(i + 1) <= 0x9F;
-    const bool separator_or_bidi = c == 0xE2 && ((byte(i + 1) == 0x80 && byte(i + 2) >= 0xA8 && byte(i + 2) <= 0xAE) ||
-                                                 (byte(i + 1) == 0x81 && byte(i + 2) >= 0xA6 && byte(i + 2) <= 0xA9));
-    if (c < 0x20 || c == 0x7F || c1 || separator_or_bidi)
-      return invalid_argument(field, "holds a control or bidirectional formatting character (NUL, newline, DEL, U+202E, ...)");
-  }
-  return true;
 }
 
 pb::Verdict to_proto(Verdict v) {
@@ -351,6 +334,83 @@ Verdict from_proto(pb::Verdict v) {
     case pb::TOUCHING: return Verdict::kTouching;
     case pb::COLLISION: return Verdict::kCollision;
     default: return Verdict::kInconclusive;
+  }
+}
+
+Result<engine::ClearanceRequest> to_clearance_request(const pb::ClearanceQueryRequest& in) {
+  engine::ClearanceRequest out;
+  for (auto [side, from, name] : {std::tuple{&out.a, &in.a(), "a"}, std::tuple{&out.b, &in.b(), "b"}}) {
+    side->part_id = from->part_id();
+    side->scene_id = from->scene_id();
+    side->object_id = from->object_id();
+    if (!from->object_id().empty()) continue;  // a scene object: its own pose
+    auto pose = to_pose(from->pose(), std::string(name) + ".pose");
+    if (!pose.ok()) return pose.error();
+    side->pose = pose.value();
+  }
+  out.safety_gap_mm = in.safety_gap_mm();
+  out.region_merge_mm = in.region_merge_mm();
+  out.compute_depth = in.compute_depth();
+  out.depth_along = Vec3(in.depth_along().x_mm(), in.depth_along().y_mm(), in.depth_along().z_mm());
+  out.compute_volume = in.compute_volume();
+  return out;
+}
+
+void to_proto(const engine::ClearanceResult& r, pb::ClearanceQueryResponse* out) {
+  out->set_verdict(to_proto(r.verdict));
+  out->set_inconclusive_reason(to_proto(r.inconclusive_reason));
+  out->set_reason(r.reason);
+  out->set_distance_mm(r.distance_mm);
+  to_proto(r.point_a, out->mutable_point_a());
+  to_proto(r.point_b, out->mutable_point_b());
+  out->set_triangle_a(r.triangle_a);
+  out->set_triangle_b(r.triangle_b);
+  out->set_face_a(r.face_a);
+  out->set_face_b(r.face_b);
+  out->set_refined_on_brep(r.refined_on_brep);
+  out->set_exact_faces_us(r.exact_faces_us);
+  out->set_error_bound_mm(r.error_bound_mm);
+  out->set_pairs_within_gap(r.pairs_within_gap);
+  out->set_pairs_truncated(r.pairs_truncated);
+  for (const engine::ClearanceRegion& region : r.regions) {
+    pb::ContactRegion* o = out->add_regions();
+    o->set_min_distance_mm(region.min_distance_mm);
+    to_proto(region.point_a, o->mutable_point_a());
+    to_proto(region.point_b, o->mutable_point_b());
+    o->set_triangle_pairs(region.triangle_pairs);
+    to_proto(region.bounds.min, o->mutable_bounds_min());
+    to_proto(region.bounds.max, o->mutable_bounds_max());
+    for (int f : region.faces_a) o->add_faces_a(static_cast<std::uint32_t>(f));
+    for (int f : region.faces_b) o->add_faces_b(static_cast<std::uint32_t>(f));
+  }
+  out->set_gap_violated(r.gap_violated);
+  out->set_depth_mm(r.depth_mm);
+  if (r.depth_direction != Vec3::Zero()) to_proto(r.depth_direction, out->mutable_depth_direction());
+  out->set_depth_exact(r.depth_exact);
+  out->set_depth_method(r.depth_method);
+  out->set_depth_max_angle_deg(r.depth_max_angle_deg);
+  out->set_depth_pieces_a(r.depth_pieces_a);
+  out->set_depth_pieces_b(r.depth_pieces_b);
+  out->set_interference_volume_mm3(r.interference_volume_mm3);
+  out->set_volume_error_bound_mm3(r.volume_error_bound_mm3);
+  out->set_volume_cell_mm(r.volume_cell_mm);
+  out->set_volume_method(r.volume_method);
+  out->set_not_computed(r.not_computed);
+  out->set_elapsed_us(r.elapsed_us);
+}
+
+void to_proto(const MoveOutcome& outcome, pb::MoveResult* out) {
+  out->set_verdict(to_proto(outcome.verdict));
+  out->set_candidates(outcome.candidates);
+  for (const ObjectContactResult& c : outcome.contacts) {
+    pb::ObjectContact* o = out->add_contacts();
+    o->set_other_object_id(c.other);
+    o->set_verdict(to_proto(c.verdict));
+    o->set_distance_mm(c.distance_mm);
+    to_proto(c.point, o->mutable_point());
+    to_proto(c.other_point, o->mutable_other_point());
+    o->set_inconclusive_reason(to_proto(c.inconclusive_reason));
+    o->set_decided_on_brep(c.decided_on_brep);
   }
 }
 

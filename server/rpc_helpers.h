@@ -2,7 +2,7 @@
 #pragma once
 
 #include "server/rpc_stats.h"
-#include "server/work_pool.h"
+#include "server/engine_names.h"
 
 #include <grpcpp/grpcpp.h>
 #include <spdlog/spdlog.h>

@@ -58,14 +58,8 @@ class DragReactor final : public grpc::ServerBidiReactor<pb::MoveObjectRequest, 
   DragSession session_;
 };
 
-// A client-named object id (empty: assigned), and its labels.
-Result<bool> check_object(const pb::SceneObject& in, const std::string& field) {
-  if (!in.object_id().empty())
-    if (auto bad = check_id(in.object_id(), field + ".object_id"); !bad.ok()) return bad;
-  for (const auto& [text, name] : {std::pair<const std::string*, const char*>{&in.name(), ".name"}, {&in.category(), ".category"},
-                                   {&in.group(), ".group"}})
-    if (auto bad = check_label(*text, field + name); !bad.ok()) return bad;
-  return true;
+SceneObjectRecord to_record(const pb::SceneObject& in, const StoredPose& pose) {
+  return {in.object_id(), in.name(), in.category(), in.part_id(), pose, in.group()};
 }
 
 // Streams an audit's progress until it ends; the job itself runs whether or not anyone watches.
@@ -147,8 +141,7 @@ grpc::ServerUnaryReactor* GatekeeperService::CreateScene(grpc::CallbackServerCon
                                                          pb::SceneInfo* response) {
   return unary(ctx, stats_, "CreateScene", [&]() -> grpc::Status {
     if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
-    if (auto bad = check_label(request->name(), "name"); !bad.ok()) return to_status(bad.error());
-    auto scene = scenes_.create(request->name());
+    auto scene = engine_.create_scene(request->name());
     if (!scene.ok()) return grpc::Status(to_status(scene.error()));
     scene_to_proto(scene.value(), response);
     return grpc::Status(grpc::Status::OK);
@@ -160,41 +153,10 @@ grpc::Status GatekeeperService::move(const pb::MoveObjectRequest& request, pb::M
   const auto t0 = Clock::now();
   auto pose = to_stored_pose(request.pose(), "pose");
   if (!pose.ok()) return to_status(pose.error());
-  if (!std::isfinite(request.clearance_mm()) || request.clearance_mm() < 0.0)
-    return {grpc::StatusCode::INVALID_ARGUMENT, "clearance_mm: must be a finite distance >= 0"};
-  auto moved = scenes_.move(request.scene_id(), request.object_id(), pose.value());
+  auto moved = engine_.move_object(request.scene_id(), request.object_id(), pose.value(), request.clearance_mm(), drag, stop);
   if (!moved.ok()) return to_status(moved.error());
-  return contacts(request.scene_id(), request.object_id(), request.clearance_mm(), pose.value().transform(), drag, t0, response,
-                  stop);
-}
-
-grpc::Status GatekeeperService::contacts(const std::string& scene_id, const std::string& object_id, double clearance_mm,
-                                         const RigidTransform& pose, DragSession* drag, Clock::time_point t0,
-                                         pb::MoveResult* response, const StopToken& stop) {
-  Result<MoveOutcome> outcome = Error{};
-  if (drag) {
-    auto version = scenes_.version(scene_id);
-    if (!version.ok()) return to_status(version.error());
-    outcome = drag->move(scene_id, version.value(), [&] { return scenes_.get(scene_id); }, object_id, clearance_mm, pose, parts_);
-  } else {
-    auto scene = scenes_.get(scene_id);
-    if (!scene.ok()) return to_status(scene.error());
-    outcome = object_contacts(scene.value(), object_id, clearance_mm, parts_, stop);
-  }
-  if (!outcome.ok()) return to_status(outcome.error());
-  response->set_object_id(object_id);
-  response->set_verdict(to_proto(outcome.value().verdict));
-  response->set_candidates(outcome.value().candidates);
-  for (const ObjectContactResult& c : outcome.value().contacts) {
-    pb::ObjectContact* o = response->add_contacts();
-    o->set_other_object_id(c.other);
-    o->set_verdict(to_proto(c.verdict));
-    o->set_distance_mm(c.distance_mm);
-    to_proto(c.point, o->mutable_point());
-    to_proto(c.other_point, o->mutable_other_point());
-    o->set_inconclusive_reason(to_proto(c.inconclusive_reason));
-    o->set_decided_on_brep(c.decided_on_brep);
-  }
+  response->set_object_id(request.object_id());
+  to_proto(moved.value(), response);
   response->set_elapsed_us(us_since(t0));
   return grpc::Status::OK;
 }
@@ -205,19 +167,15 @@ grpc::ServerUnaryReactor* GatekeeperService::PutObject(grpc::CallbackServerConte
                     [this, ctx](const pb::PutObjectRequest& put, pb::MoveResult* out) -> grpc::Status {
     const auto t0 = Clock::now();
     if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
-    const pb::SceneObject& in = put.object();
-    if (auto bad = check_object(in, "object"); !bad.ok()) return to_status(bad.error());
-    auto part = parts_.store().get(in.part_id());
-    if (!part.ok()) return to_status(Error{part.error().code, "object.part_id", part.error().message});
-    auto pose = to_stored_pose(in.pose(), "object.pose");
+    auto pose = to_stored_pose(put.object().pose(), "object.pose");
     if (!pose.ok()) return to_status(pose.error());
-    if (!std::isfinite(put.clearance_mm()) || put.clearance_mm() < 0.0)
-      return {grpc::StatusCode::INVALID_ARGUMENT, "clearance_mm: must be a finite distance >= 0"};
-    auto stored = scenes_.put(put.scene_id(), {in.object_id(), in.name(), in.category(), in.part_id(), pose.value(), in.group()});
-    if (!stored.ok()) return to_status(stored.error());
-    // Stored once; then the new object's contacts, as a move would answer them.
     const StopToken stop([ctx] { return ctx->IsCancelled() || past_deadline(ctx); });
-    return contacts(put.scene_id(), stored.value().id, put.clearance_mm(), pose.value().transform(), nullptr, t0, out, stop);
+    auto placed = engine_.put_object(put.scene_id(), to_record(put.object(), pose.value()), put.clearance_mm(), stop);
+    if (!placed.ok()) return to_status(placed.error());
+    out->set_object_id(placed.value().object_id);
+    to_proto(placed.value().outcome, out);
+    out->set_elapsed_us(us_since(t0));
+    return grpc::Status::OK;
   });
 }
 
@@ -226,23 +184,14 @@ grpc::ServerUnaryReactor* GatekeeperService::PutObjects(grpc::CallbackServerCont
   return run_queued(record_pool_, stats_, ctx, "PutObjects", request, response,
                     [this, ctx](const pb::PutObjectsRequest& put, pb::PutObjectsResponse* out) -> grpc::Status {
     if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
-    // Every object is checked before anything is stored, so a bad one leaves the scene as it was.
     std::vector<SceneObjectRecord> objects;
-    std::set<std::string> known_parts;
     for (int i = 0; i < put.objects_size(); ++i) {
-      const pb::SceneObject& in = put.objects(i);
-      const std::string field = "objects[" + std::to_string(i) + "]";
-      if (auto bad = check_object(in, field); !bad.ok()) return to_status(bad.error());
-      if (!known_parts.count(in.part_id())) {
-        auto part = parts_.store().get(in.part_id());
-        if (!part.ok()) return grpc::Status(to_status(Error{part.error().code, field + ".part_id", part.error().message}));
-        known_parts.insert(in.part_id());
-      }
-      auto pose = to_stored_pose(in.pose(), field + ".pose");
+      auto pose = to_stored_pose(put.objects(i).pose(), "objects[" + std::to_string(i) + "].pose");
       if (!pose.ok()) return grpc::Status(to_status(pose.error()));
-      objects.push_back({in.object_id(), in.name(), in.category(), in.part_id(), pose.value(), in.group()});
+      objects.push_back(to_record(put.objects(i), pose.value()));
     }
-    auto stored = scenes_.put_many(put.scene_id(), std::move(objects));
+    // All or nothing: a bad object leaves the scene as it was.
+    auto stored = engine_.put_objects(put.scene_id(), std::move(objects));
     if (!stored.ok()) return grpc::Status(to_status(stored.error()));
     for (const SceneObjectRecord& o : stored.value()) out->add_object_ids(o.id);
     return grpc::Status(grpc::Status::OK);
@@ -271,7 +220,7 @@ grpc::ServerUnaryReactor* GatekeeperService::DeleteObject(grpc::CallbackServerCo
                                                           pb::SceneInfo* response) {
   return unary(ctx, stats_, "DeleteObject", [&]() -> grpc::Status {
     if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
-    auto scene = scenes_.remove(request->scene_id(), request->object_id());
+    auto scene = engine_.delete_object(request->scene_id(), request->object_id());
     if (!scene.ok()) return grpc::Status(to_status(scene.error()));
     scene_to_proto(scene.value(), response);
     return grpc::Status(grpc::Status::OK);
@@ -281,7 +230,7 @@ grpc::ServerUnaryReactor* GatekeeperService::DeleteObject(grpc::CallbackServerCo
 grpc::ServerUnaryReactor* GatekeeperService::GetScene(grpc::CallbackServerContext* ctx, const pb::GetSceneRequest* request,
                                                       pb::SceneInfo* response) {
   return unary(ctx, stats_, "GetScene", [&]() -> grpc::Status {
-    auto scene = scenes_.get(request->scene_id());
+    auto scene = engine_.scene(request->scene_id());
     if (!scene.ok()) return grpc::Status(to_status(scene.error()));
     scene_to_proto(scene.value(), response);
     return grpc::Status(grpc::Status::OK);
@@ -292,58 +241,17 @@ grpc::ServerUnaryReactor* GatekeeperService::StartAudit(grpc::CallbackServerCont
                                                         pb::AuditJob* response) {
   const auto t0 = Clock::now();
   if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return finish(ctx, stats_, "StartAudit", t0, allowed);
-  auto checked = to_audit_options(*request, options_.audit_threads);
-  if (!checked.ok()) return finish(ctx, stats_, "StartAudit", t0, to_status(checked.error()));
-  auto scene = scenes_.get(request->scene_id());
-  if (!scene.ok()) return finish(ctx, stats_, "StartAudit", t0, to_status(scene.error()));
-  std::shared_ptr<const AuditJob> baseline;
-  if (!request->baseline_job_id().empty()) {
-    auto base = audits_.get(request->baseline_job_id());
-    if (!base.ok()) return finish(ctx, stats_, "StartAudit", t0, to_status(Error{base.error().code, "baseline_job_id", base.error().message}));
-    if (base.value()->scene().id != request->scene_id())
-      return finish(ctx, stats_, "StartAudit", t0, {grpc::StatusCode::INVALID_ARGUMENT, "baseline_job_id: audited another scene"});
-    if (base.value()->snapshot().status != AuditStatus::kDone)
-      return finish(ctx, stats_, "StartAudit", t0, {grpc::StatusCode::FAILED_PRECONDITION, "baseline_job_id: has not finished"});
-    // The baseline's answers carry over only when they were computed with the same options.
-    const std::vector<std::string> then = base.value()->answer_options();
-    const std::vector<std::string> now = AuditJob(scene.value(), checked.value()).answer_options();
-    for (std::size_t i = 0; i < now.size(); ++i)
-      if (i >= then.size() || then[i] != now[i]) {
-        const std::string name = now[i].substr(0, now[i].find('='));
-        return finish(ctx, stats_, "StartAudit", t0,
-                      {grpc::StatusCode::FAILED_PRECONDITION,
-                       name + ": the baseline was audited with " + (i < then.size() ? then[i] : std::string("unknown options")) +
-                           ", this audit asks " + now[i] + "; re-audit against a baseline with the same options, or audit in full"});
-      }
-    baseline = base.value();
-  }
-  auto job = std::make_shared<AuditJob>(scene.value(), checked.value(), baseline);
-  const std::string id = audits_.add(job);
-  PartRegistry* parts = &parts_;
-  AuditArchive* archive = archive_;
-  AuditJobs* audits = &audits_;
-  if (!audit_pool_.try_submit([job, id, parts, archive, audits] {
-        const grpc::Status ran = guarded_status("StartAudit", [&] {
-          job->run(*parts, [&](const AuditSnapshot& final_state) {
-            if (!archive) return;
-            auto saved = archive->save(id, *job, final_state);
-            if (!saved.ok()) spdlog::warn("audit {} not archived (kept in memory): {}", id, saved.error().to_string());
-            else audits->archived(id);
-          });
-          return grpc::Status::OK;
-        });
-        if (!ran.ok()) job->fail_unexpectedly(ran.error_message());
-      })) {
-    audits_.remove(id);
-    return finish(ctx, stats_, "StartAudit", t0, {grpc::StatusCode::RESOURCE_EXHAUSTED, "audit queue full: retry later"});
-  }
-  response->set_job_id(id);
+  auto asked = to_audit_options(*request);
+  if (!asked.ok()) return finish(ctx, stats_, "StartAudit", t0, to_status(asked.error()));
+  auto started = engine_.start_audit(request->scene_id(), asked.value(), request->baseline_job_id());
+  if (!started.ok()) return finish(ctx, stats_, "StartAudit", t0, to_status(started.error()));
+  response->set_job_id(started.value());
   return finish(ctx, stats_, "StartAudit", t0, grpc::Status::OK);
 }
 
 grpc::ServerWriteReactor<pb::AuditProgress>* GatekeeperService::WatchAudit(grpc::CallbackServerContext* /*ctx*/,
                                                                           const pb::WatchAuditRequest* request) {
-  auto job = audits_.get(request->job_id());
+  auto job = engine_.audit(request->job_id());
   if (!job.ok()) {
     struct Refused : grpc::ServerWriteReactor<pb::AuditProgress> {
       explicit Refused(const grpc::Status& s) { Finish(s); }
@@ -358,7 +266,7 @@ grpc::ServerUnaryReactor* GatekeeperService::CancelAudit(grpc::CallbackServerCon
                                                          pb::AuditProgress* response) {
   return unary(ctx, stats_, "CancelAudit", [&]() -> grpc::Status {
     if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
-    auto job = audits_.get(request->job_id());
+    auto job = engine_.audit(request->job_id());
     if (!job.ok()) return grpc::Status(to_status(job.error()));
     job.value()->cancel();
     progress_to_proto(request->job_id(), job.value()->snapshot(), response);
@@ -371,7 +279,7 @@ grpc::ServerUnaryReactor* GatekeeperService::GetAuditReport(grpc::CallbackServer
   // Read back from the archive when evicted, and rendered as a page on request: off the callback thread.
   return run_queued(record_pool_, stats_, ctx, "GetAuditReport", request, response,
                     [this](const pb::GetAuditReportRequest& get, pb::AuditReport* out) -> grpc::Status {
-    auto job = audits_.get(get.job_id());
+    auto job = engine_.audit(get.job_id());
     if (!job.ok()) return grpc::Status(to_status(job.error()));
     const AuditSnapshot snapshot = job.value()->snapshot();
     progress_to_proto(get.job_id(), snapshot, out->mutable_progress());

@@ -1,7 +1,7 @@
 #include "machine_models/p4/bend_step.h"
 
 #include "kernel/tolerances.h"
-#include "machine_models/p4/content_hash.h"
+#include "kernel/content_hash.h"
 
 #include <cmath>
 #include <limits>
@@ -20,7 +20,7 @@ const char* to_string(StepKind kind) {
   return "?";
 }
 
-std::uint64_t BendStep::hash() const {
+Hash128 BendStep::hash() const {
   return ContentHash()
       .add({static_cast<double>(kind), bend_point_mm.x(), bend_point_mm.y(), bend_direction.x(), bend_direction.y(),
             target_angle_deg, rotate_angle_deg, travel_mm.x(), travel_mm.y(), travel_mm.z(), lateral_shift_mm, retract_mm, turned_deg})

@@ -1,6 +1,7 @@
 // One step of a bend sequence, and where it puts the part in the machine.
 #pragma once
 
+#include "kernel/content_hash.h"
 #include "kernel/rigid_transform.h"
 #include "kernel/status.h"
 #include "machine_models/p4/machine_model.h"
@@ -32,7 +33,7 @@ struct BendStep {
   // re-approach after a retracted ROTATE. [deg]
   double turned_deg = 0.0;
 
-  std::uint64_t hash() const;
+  Hash128 hash() const;
 };
 
 // Checks the step against the machine (angles in range, finite vectors, non-zero bend line).

@@ -1,13 +1,13 @@
 #include "machine_models/p4/machine_state.h"
 
-#include "machine_models/p4/content_hash.h"
+#include "kernel/content_hash.h"
 #include "machine_models/p4/machine_model.h"
 
 #include <cmath>
 
 namespace gk::p4 {
 
-std::uint64_t MachineState::hash() const {
+Hash128 MachineState::hash() const {
   ContentHash h;
   h.add(static_cast<double>(engaged_segments.size()));
   for (bool e : engaged_segments) h.add(e ? 1.0 : 0.0);
@@ -43,6 +43,12 @@ Result<bool> validate_state(const MachineModel& model, const MachineState& state
   if (!std::isfinite(state.lower_blade_z_offset_mm) || std::fabs(state.lower_blade_z_offset_mm) > 500.0)
     return invalid_argument("lower_blade_z_offset_mm", "must be within [-500, 500] mm");
   return true;
+}
+
+bool MachineState::operator==(const MachineState& o) const {
+  return engaged_segments == o.engaged_segments && clamp_z_mm == o.clamp_z_mm && manipulator_x_mm == o.manipulator_x_mm &&
+         manipulator_y_mm == o.manipulator_y_mm && manipulator_rotation_deg == o.manipulator_rotation_deg &&
+         lower_blade_z_offset_mm == o.lower_blade_z_offset_mm;
 }
 
 }  // namespace gk::p4

@@ -2,6 +2,7 @@
 // blade positions.
 #pragma once
 
+#include "kernel/content_hash.h"
 #include "kernel/status.h"
 
 #include <cstdint>
@@ -20,7 +21,10 @@ struct MachineState {
   double manipulator_rotation_deg = 0.0;
   double lower_blade_z_offset_mm = 0.0;  // from its parked position, + up
 
-  std::uint64_t hash() const;
+  Hash128 hash() const;
+  // Every field equal (a hash may collide: a validator is set to a state by equality).
+  bool operator==(const MachineState& other) const;
+  bool operator!=(const MachineState& other) const { return !(*this == other); }
 
   // Engages exactly the slots lying within [x_min, x_max] (a slot sticking out is left
   // disengaged) and disengages every other slot.

@@ -1,14 +1,14 @@
 #include "machine_models/p4/sheet_part.h"
 
 #include "kernel/tolerances.h"
-#include "machine_models/p4/content_hash.h"
+#include "kernel/content_hash.h"
+#include "kernel/units.h"
 
 #include <cmath>
 
 namespace gk::p4 {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // Outward normal of a side, and the axis an up-bend turns about (outward x up).
 Vec3 outward(Side s) {
@@ -209,7 +209,7 @@ TriangleMesh SheetPart::mesh(std::vector<int>* plate_of_triangle) const {
   return plates_mesh(plates_);
 }
 
-std::uint64_t SheetPart::compute_hash() const {
+Hash128 SheetPart::compute_hash() const {
   ContentHash h;
   h.add(thickness_);
   if (surface_) {

@@ -3,6 +3,7 @@
 // the blank spans X [0, width], Y [0, depth], Z [0, thickness].
 #pragma once
 
+#include "kernel/content_hash.h"
 #include "kernel/rigid_transform.h"
 #include "kernel/status.h"
 #include "kernel/triangle_mesh.h"
@@ -69,7 +70,7 @@ class SheetPart {
   TriangleMesh mesh(std::vector<int>* plate_of_triangle = nullptr) const;
   // A content hash of the geometry, for memo keys.
   // Of the geometry, computed once when the part is made (a part never changes afterwards).
-  std::uint64_t content_hash() const { return hash_; }
+  Hash128 content_hash() const { return hash_; }
 
   // Splits the part by the vertical plane through the bend line (point, direction in XY; the
   // moving side lies to the left of the direction). Plates on the moving side beyond offset_mm go
@@ -95,8 +96,8 @@ class SheetPart {
   double thickness_ = 0.0;
   std::shared_ptr<const TriangleMesh> surface_;
   double deflection_ = 0.0;
-  std::uint64_t hash_ = 0;
-  std::uint64_t compute_hash() const;
+  Hash128 hash_;
+  Hash128 compute_hash() const;
 };
 
 TriangleMesh plates_mesh(const std::vector<Plate>& plates);

@@ -6,6 +6,7 @@
 #include "machine_models/p4/convex_polytope.h"
 #include "machine_models/p4/manipulator_geometry.h"
 #include "machine_models/p4/organ_geometry.h"
+#include "kernel/units.h"
 
 #include <algorithm>
 #include <chrono>
@@ -15,15 +16,10 @@
 namespace gk::p4 {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 using Clock = std::chrono::steady_clock;
 
 double us_since(Clock::time_point t0) { return std::chrono::duration<double, std::micro>(Clock::now() - t0).count(); }
 
-std::uint64_t mix(std::uint64_t h, std::uint64_t v) {
-  h ^= v + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
-  return h;
-}
 
 bool is_bend(StepKind k) { return k == StepKind::kBendUp || k == StepKind::kBendDown; }
 
@@ -189,7 +185,7 @@ void StepValidator::clear_caches() {
 Result<std::shared_ptr<const StepValidator::Prepared>> StepValidator::prepare(const SheetPart& part, const BendStep& step) {
   const MachineModel& model = scene_->model();
   const MachineState& state = scene_->state();
-  const std::uint64_t key = mix(mix(part.content_hash(), step.hash()), state.hash());
+  const Hash128 key = ContentHash().add(part.content_hash()).add(step.hash()).add(state.hash()).value();
   if (auto it = prepared_.find(key); it != prepared_.end()) return it->second;
 
   auto prepared = std::make_shared<Prepared>();
@@ -428,8 +424,9 @@ Result<StepAnswer> StepValidator::answer_step(const SheetPart& part, const BendS
   auto valid = validate_step(scene_->model(), step);
   if (!valid.ok()) return valid.error();
   const std::uint64_t kind = figures == Figures::kVerdictOnly ? 3 : with_corrections ? 1 : 2;
-  const std::uint64_t key = mix(mix(mix(part.content_hash(), step.hash()), scene_->state().hash()), kind);
-  if (auto it = memo_.find(key); it != memo_.end()) {
+  const Hash128 key = ContentHash().add(part.content_hash()).add(step.hash()).add(scene_->state().hash()).add(kind).value();
+  const bool memoize = options_.memoize_answers || figures == Figures::kVerdictOnly;
+  if (auto it = memoize ? memo_.find(key) : memo_.end(); it != memo_.end()) {
     StepAnswer hit = it->second;
     hit.decided_by = Stage::kCache;
     hit.times = StageTimes{};
@@ -442,6 +439,7 @@ Result<StepAnswer> StepValidator::answer_step(const SheetPart& part, const BendS
   if (a.verdict == Verdict::kCollision && with_corrections) add_correction(part, step, a);
   a.times.cache_us = 0.0;
   a.times.total_us = us_since(t0);
+  if (!memoize) return result;
   if (memo_.size() >= options_.memo_capacity) memo_.clear();
   memo_[key] = a;
   return result;

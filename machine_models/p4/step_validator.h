@@ -103,6 +103,10 @@ struct ValidatorOptions {
   int correction_search_budget = 16;       // steps validated (memo hits free) while searching a correction
   bool compute_corrections = true;
   std::size_t memo_capacity = 100000;     // answers kept (small)
+  // Whether the answers validate() returns are memoised here. A caller with an answer cache of its
+  // own (the engine's, engine/steps/step_answers) turns this off so that there is one; the
+  // correction search's verdict-only answers are memoised either way.
+  bool memoize_answers = true;
   std::size_t prepared_capacity = 2000;   // prepared steps kept...
   std::size_t prepared_triangle_budget = 1000000;  // ...and their bodies' triangles at most (about 250 MB)
 };
@@ -144,8 +148,8 @@ class StepValidator {
 
   std::shared_ptr<MachineScene> scene_;
   ValidatorOptions options_;
-  std::unordered_map<std::uint64_t, StepAnswer> memo_;
-  std::unordered_map<std::uint64_t, std::shared_ptr<const Prepared>> prepared_;
+  std::unordered_map<Hash128, StepAnswer, Hash128::Std> memo_;
+  std::unordered_map<Hash128, std::shared_ptr<const Prepared>, Hash128::Std> prepared_;
   std::size_t prepared_triangles_ = 0;
 };
 

@@ -3,7 +3,7 @@
 //    each through BRepExtrema), against BRepExtrema on the whole shapes;
 //  - the penetration depth vector of interpenetrating large meshes.
 //   build/tests/benchmarks/clearance_benchmark [--benchmark_filter=...]
-#include "engine/pair_verdict.h"
+#include "engine/verdicts/pair_verdict.h"
 #include "kernel/contact_regions.h"
 #include "kernel/exact_interference_volume.h"
 #include "kernel/interference_volume.h"

@@ -3,8 +3,8 @@
 // part by less than the 0.05 mm tessellation — at the origin and at 5e4 mm, with the offset written
 // into the file and with it in the pose. The shapes are built with OCCT's primitives, written to
 // BREP bytes and read back through the project's reader, as an upload would be.
-#include "engine/exact_depth.h"
-#include "engine/pair_verdict.h"
+#include "engine/verdicts/exact_depth.h"
+#include "engine/verdicts/pair_verdict.h"
 #include "kernel/exact_interference_volume.h"
 #include "kernel/interference_volume.h"
 #include "kernel/penetration_depth.h"
@@ -13,6 +13,7 @@
 #include "occt_adapters/brep_contact.h"
 #include "occt_adapters/shape_import.h"
 #include "occt_adapters/shape_mesher.h"
+#include "kernel/units.h"
 
 #include <BRepPrimAPI_MakeBox.hxx>
 #include <BRepPrimAPI_MakeCylinder.hxx>
@@ -379,7 +380,6 @@ TEST(CadPairVerdict, AFlatFaceCuttingATorusAtItsSeamsCollides) {
 // A shared volume measured on a CAD part's tessellation is the triangles' volume; the band bound
 // added for the deflection covers the way to the exact solid's (analytic caps of a ball).
 TEST(CadVolume, TheTessellationBandCoversTheExactSolidsVolume) {
-  constexpr double kPi = 3.14159265358979323846;
   const double r = 10.0;
   auto ball = cad_part(sphere(Vec3::Zero(), r));
   for (double h : {-30.0, -5.0, 0.0, 9.8}) {  // the box z >= h cuts a cap of height r - h (all of it below -r)
@@ -455,7 +455,6 @@ TEST(CadDepth, ACadPartAgainstAMeshIsFreedOnItsExactFaces) {
 // integration error did not: 2e-16 mm^3 claimed, 1.4e-7 mm^3 off on a torus lens). Oracle: the
 // closed-form lens of two equal balls, V = pi (4r + d)(2r - d)^2 / 12 at centre distance d.
 TEST(CadVolume, TheBooleanCommonsBoundHoldsOnLensesOfEveryDepth) {
-  constexpr double kPi = 3.14159265358979323846;
   const double r = 10.0;
   auto a = cad_part(sphere(Vec3::Zero(), r));
   auto b = cad_part(sphere(Vec3::Zero(), r));

@@ -5,6 +5,7 @@
 #include "kernel/interference_volume.h"
 #include "kernel/penetration_depth.h"
 #include "tests/support/random_meshes.h"
+#include "kernel/units.h"
 
 #include <gtest/gtest.h>
 
@@ -13,7 +14,6 @@
 namespace gk {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 double uniform(testing::Rng& rng, double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }
 

@@ -3,6 +3,7 @@
 #include "kernel/oriented_box.h"
 
 #include "kernel/tolerances.h"
+#include "kernel/units.h"
 
 #include <gtest/gtest.h>
 
@@ -18,7 +19,6 @@ namespace {
 
 using Rng = std::mt19937_64;
 
-constexpr double kPi = 3.14159265358979323846;
 
 Mat3 random_rotation(Rng& rng) {
   std::normal_distribution<double> g(0.0, 1.0);

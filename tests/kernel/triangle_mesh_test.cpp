@@ -3,6 +3,7 @@
 
 #include "kernel/tolerances.h"
 #include "tests/support/random_meshes.h"
+#include "kernel/units.h"
 
 #include <gtest/gtest.h>
 
@@ -18,7 +19,6 @@ using Face = TriangleMesh::Face;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr double kPi = 3.14159265358979323846;
 
 const std::vector<Vec3> kTetraVertices = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
 const std::vector<Face> kTetraFaces = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};  // outward

@@ -6,6 +6,7 @@
 #include "kernel/mesh_distance.h"
 #include "machine_models/p4/step_validator.h"
 #include "tests/machine_models/p4_test_engine.h"
+#include "kernel/units.h"
 
 #include <gtest/gtest.h>
 
@@ -15,7 +16,6 @@ namespace gk::p4 {
 namespace {
 
 using namespace testing_engine;
-constexpr double kPi = 3.14159265358979323846;
 
 bool is_segment(const std::string& organ) { return organ.rfind("aba.segment.", 0) == 0; }
 

@@ -8,6 +8,7 @@
 #include "occt_adapters/shape_import.h"
 #include "occt_adapters/shape_mesher.h"
 #include "tests/support/random_meshes.h"
+#include "kernel/units.h"
 
 #include <gtest/gtest.h>
 
@@ -16,7 +17,6 @@
 namespace gk::p4 {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 double deg(double rad) { return rad * 180.0 / kPi; }
 
 using namespace testing_engine;

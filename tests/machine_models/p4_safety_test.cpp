@@ -12,6 +12,7 @@
 #include "occt_adapters/shape_builders.h"
 #include "occt_adapters/shape_mesher.h"
 #include "tests/support/random_meshes.h"
+#include "kernel/units.h"
 
 #include <gtest/gtest.h>
 
@@ -21,7 +22,6 @@
 namespace gk::p4 {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 struct RandomBend {
   SheetPart part = SheetPart::from_plates({}, 1.0);

@@ -60,6 +60,7 @@
 #include "machine_models/p4/step_validator.h"
 #include "occt_adapters/shape_builders.h"
 #include "occt_adapters/shape_impl.h"
+#include "kernel/units.h"
 
 #include <BRepAlgoAPI_Common.hxx>
 #include <BRepBndLib.hxx>
@@ -105,7 +106,6 @@
 namespace gk::p4 {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 // Intended contact: a face may be crossed by kIntendedContactMm; the oracle clips this far beyond
 // the face plane (0.001 mm of slack for the validator's own rounding).

@@ -10,6 +10,7 @@
 #include "occt_adapters/shape_import.h"
 #include "occt_adapters/shape_mesher.h"
 #include "tests/support/random_meshes.h"
+#include "kernel/units.h"
 
 #include <gtest/gtest.h>
 
@@ -20,7 +21,6 @@
 namespace gk::occt {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 std::string write_temp(const std::string& name, const std::string& bytes) {
   const auto path = std::filesystem::temp_directory_path() / ("gk-occt-test-" + name);

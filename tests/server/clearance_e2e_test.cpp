@@ -11,6 +11,7 @@
 #include "tests/server/daemon_fixture.h"
 #include "tests/support/sanitized_build.h"
 #include "tests/support/random_meshes.h"
+#include "kernel/units.h"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
@@ -25,7 +26,6 @@ namespace {
 namespace pb = ::gatekeeper::v1;
 using testing::Daemon;
 
-constexpr double kPi = 3.14159265358979323846;
 
 void set_pose(const Eigen::AngleAxisd& rotation, const Vec3& translation, pb::Pose* out) {
   out->mutable_translation()->set_x_mm(translation.x());

@@ -1,7 +1,8 @@
 #include "tests/server/daemon_fixture.h"
 
+#include "clients/gatekeeper_client/upload.h"
+
 #include <gtest/gtest.h>
-#include <openssl/evp.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -24,18 +25,7 @@ std::string temp_dir(const std::string& tag) {
   return dir.string();
 }
 
-std::string sha256_hex(const std::string& bytes) {
-  unsigned char out[EVP_MAX_MD_SIZE];
-  unsigned int n = 0;
-  EVP_Digest(bytes.data(), bytes.size(), out, &n, EVP_sha256(), nullptr);
-  static const char* digits = "0123456789abcdef";
-  std::string hex;
-  for (unsigned int i = 0; i < n; ++i) {
-    hex += digits[out[i] >> 4];
-    hex += digits[out[i] & 15];
-  }
-  return hex;
-}
+std::string sha256_hex(const std::string& bytes) { return client::sha256_hex(bytes); }
 
 std::string read_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -97,22 +87,12 @@ int Daemon::stop(int signal_number) {
 
 grpc::Status upload_part(gatekeeper::v1::Gatekeeper::Stub& stub, const std::string& bytes, const std::string& format,
                          gatekeeper::v1::PartInfo* info, const std::string& declared_sha, std::size_t chunk) {
-  grpc::ClientContext ctx;
-  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
-  auto writer = stub.UploadPart(&ctx, info);
-  gatekeeper::v1::UploadPartChunk header;
-  header.mutable_header()->set_name("part." + format);
-  header.mutable_header()->set_format(format);
-  header.mutable_header()->set_size_bytes(bytes.size());
-  header.mutable_header()->set_sha256(declared_sha.empty() ? sha256_hex(bytes) : declared_sha);
-  writer->Write(header);
-  for (std::size_t at = 0; at < bytes.size(); at += chunk) {
-    gatekeeper::v1::UploadPartChunk data;
-    data.set_data(bytes.substr(at, chunk));
-    if (!writer->Write(data)) break;
-  }
-  writer->WritesDone();
-  return writer->Finish();
+  client::UploadOptions options;
+  options.format = format;
+  options.declared_sha = declared_sha;
+  options.chunk_bytes = chunk;
+  options.deadline = std::chrono::seconds(60);
+  return client::upload_part(stub, bytes, options, info);
 }
 
 std::string upload_part_id(gatekeeper::v1::Gatekeeper::Stub& stub, const std::string& bytes, const std::string& format) {
@@ -127,6 +107,20 @@ std::string box_obj(double lo_x, double lo_y, double lo_z, double hi_x, double h
     obj += "v " + std::to_string((k & 1) ? hi_x : lo_x) + " " + std::to_string((k & 2) ? hi_y : lo_y) + " " +
            std::to_string((k & 4) ? hi_z : lo_z) + "\n";
   return obj + "f 1 3 4\nf 1 4 2\nf 5 6 8\nf 5 8 7\nf 1 2 6\nf 1 6 5\nf 3 7 8\nf 3 8 4\nf 1 5 7\nf 1 7 3\nf 2 4 8\nf 2 8 6\n";
+}
+
+gatekeeper::v1::ValidateStepRequest bend_request(double flange_mm, double angle_deg) {
+  gatekeeper::v1::ValidateStepRequest r;
+  r.mutable_part()->set_width_mm(1000.0);
+  r.mutable_part()->set_depth_mm(800.0);
+  r.mutable_part()->set_thickness_mm(1.5);
+  r.mutable_step()->set_kind(gatekeeper::v1::BEND_UP);
+  r.mutable_step()->mutable_bend_point()->set_y_mm(800.0 - flange_mm);
+  r.mutable_step()->mutable_bend_direction()->set_x_mm(1.0);
+  r.mutable_step()->set_target_angle_deg(angle_deg);
+  r.mutable_state()->set_clamp_z_mm(1.5);
+  r.mutable_state()->set_manipulator_y_mm(-400.0);  // on the held side, behind the blankholder
+  return r;
 }
 
 gatekeeper::v1::AuditReport run_audit(gatekeeper::v1::Gatekeeper::Stub& stub, const gatekeeper::v1::StartAuditRequest& start, bool html) {

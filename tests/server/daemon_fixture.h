@@ -48,6 +48,10 @@ std::string box_obj(double lo_x, double lo_y, double lo_z, double hi_x, double h
 grpc::Status upload_part(gatekeeper::v1::Gatekeeper::Stub& stub, const std::string& bytes, const std::string& format,
                          gatekeeper::v1::PartInfo* info, const std::string& declared_sha = "", std::size_t chunk = 1u << 20);
 
+// A flange of flange_mm bent up to angle_deg on a 1000 x 800 x 1.5 mm blank, the manipulator on
+// the held side: CLEAR below 203 mm (the beam's underside over the table), a collision above.
+gatekeeper::v1::ValidateStepRequest bend_request(double flange_mm, double angle_deg);
+
 // Starts an audit, watches it to its end and returns its report (failures fail the test).
 gatekeeper::v1::AuditReport run_audit(gatekeeper::v1::Gatekeeper::Stub& stub, const gatekeeper::v1::StartAuditRequest& start,
                                       bool html = false);

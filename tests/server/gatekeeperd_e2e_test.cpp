@@ -10,6 +10,7 @@
 #include "occt_adapters/shape_import.h"
 #include "tests/server/daemon_fixture.h"
 #include "tests/support/random_meshes.h"
+#include "kernel/units.h"
 
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -23,22 +24,9 @@ namespace {
 
 namespace pb = ::gatekeeper::v1;
 using testing::Daemon;
+using testing::bend_request;
 
-constexpr double kPi = 3.14159265358979323846;
 
-pb::ValidateStepRequest bend_request(double flange_mm, double angle_deg) {
-  pb::ValidateStepRequest r;
-  r.mutable_part()->set_width_mm(1000.0);
-  r.mutable_part()->set_depth_mm(800.0);
-  r.mutable_part()->set_thickness_mm(1.5);
-  r.mutable_step()->set_kind(pb::BEND_UP);
-  r.mutable_step()->mutable_bend_point()->set_y_mm(800.0 - flange_mm);
-  r.mutable_step()->mutable_bend_direction()->set_x_mm(1.0);
-  r.mutable_step()->set_target_angle_deg(angle_deg);
-  r.mutable_state()->set_clamp_z_mm(1.5);
-  r.mutable_state()->set_manipulator_y_mm(-400.0);  // on the held side, behind the blankholder
-  return r;
-}
 
 grpc::Status call(pb::Gatekeeper::Stub& stub, const pb::ValidateStepRequest& r, pb::ValidateStepResponse* out) {
   grpc::ClientContext ctx;

@@ -3,6 +3,7 @@
 #include "kernel/bvh_cache.h"
 #include "mesh_io/mesh_file_reader.h"
 #include "tests/support/random_meshes.h"
+#include "kernel/units.h"
 
 #include <cmath>
 #include <map>
@@ -13,7 +14,6 @@
 namespace gk::testing {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kBayMm = 10000.0;
 
 // Where BVHs come from: built, or through the disk cache when the options name one.

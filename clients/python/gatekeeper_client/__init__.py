@@ -1,1 +1,1 @@
-"""Python clients of gatekeeperd (stubs generated from proto/ at build time into build/python)."""
+"""Python clients of gatekeeperd; the gRPC stubs (gatekeeper_client.v1) are generated when the package is built."""

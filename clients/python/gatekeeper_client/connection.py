@@ -1,15 +1,17 @@
-"""Finding the generated stubs and opening a channel to gatekeeperd."""
-import os
-import sys
+"""Opening a channel to gatekeeperd."""
+import grpc  # Debian's python3-grpcio
 
-_HERE = os.path.dirname(os.path.abspath(__file__))
-_STUBS = os.environ.get("GATEKEEPER_PY_STUBS", os.path.normpath(os.path.join(_HERE, "..", "..", "..", "build", "python")))
-if _STUBS not in sys.path:
-    sys.path.insert(0, _STUBS)
+try:  # generated from proto/gatekeeper/v1/gatekeeper.proto when the package is built (setup.py)
+    from gatekeeper_client.v1 import gatekeeper_pb2 as pb
+    from gatekeeper_client.v1 import gatekeeper_pb2_grpc as pb_grpc
+except ModuleNotFoundError as e:  # typically: run from the source tree, which holds no stubs
+    if e.name != "gatekeeper_client.v1":
+        raise
+    raise ModuleNotFoundError("gatekeeper_client.v1 (the gRPC stubs) exists only in the installed package: "
+                              "/usr/bin/python3 -m pip install --no-build-isolation --no-index clients/python "
+                              "into a venv (README)", name=e.name) from e
 
-import grpc  # noqa: E402  (Debian's python3-grpcio)
-from gatekeeper.v1 import gatekeeper_pb2 as pb  # noqa: E402,F401
-from gatekeeper.v1 import gatekeeper_pb2_grpc as pb_grpc  # noqa: E402
+__all__ = ["pb", "pb_grpc", "channel_credentials", "connect", "add_connection_arguments", "connect_from_arguments"]
 
 
 def _read(path):

@@ -1,23 +1,23 @@
 """A layout-tool session against gatekeeperd: upload meshes, build a scene, drag an object through
 it (every frame answered), ask for a clearance, and audit the scene with a progress bar.
 
-    /usr/bin/python3 -m gatekeeper_client.layout_tool [--address 127.0.0.1:50051] [--data ../shared/data]
+    gatekeeper-layout-tool [--address 127.0.0.1:50051] --data ../shared/data (or GATEKEEPER_SHARED_DATA)
         [--report audit.html]   (the audit's page: 3D view and sortable clash table)
 """
 import argparse
 import hashlib
 import os
 import sys
-import time
 
 from gatekeeper_client.connection import add_connection_arguments, connect_from_arguments, pb
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-DEFAULT_DATA = os.environ.get("GATEKEEPER_SHARED_DATA", os.path.normpath(os.path.join(HERE, "..", "..", "..", "..", "shared", "data")))
+# An installed package does not know where the checkout's ../shared/data is: the caller says.
+DEFAULT_DATA = os.environ.get("GATEKEEPER_SHARED_DATA")
 
 
 def upload(stub, path):
-    data = open(path, "rb").read()
+    with open(path, "rb") as f:
+        data = f.read()
     fmt = os.path.splitext(path)[1][1:].lower()
     header = pb.UploadHeader(name=os.path.basename(path), format=fmt, size_bytes=len(data), sha256=hashlib.sha256(data).hexdigest())
 
@@ -42,7 +42,8 @@ def progress_bar(p, width=30):
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_connection_arguments(parser)
-    parser.add_argument("--data", default=DEFAULT_DATA)
+    parser.add_argument("--data", default=DEFAULT_DATA, required=DEFAULT_DATA is None,
+                        help="the shared data directory (default: $GATEKEEPER_SHARED_DATA)")
     parser.add_argument("--report", help="write the audit report page (HTML) here")
     args = parser.parse_args(argv)
     stub, _ = connect_from_arguments(args)

@@ -2,7 +2,7 @@
 branch with gatekeeperd, prunes on failure, tries the corrections the gatekeeper suggests, and
 prints a table of every step plus the best feasible sequence.
 
-    /usr/bin/python3 -m gatekeeper_client.sequencer_sim [--address 127.0.0.1:50051] [--orders N]
+    gatekeeper-sequencer-sim [--address 127.0.0.1:50051] [--orders N]
 """
 import argparse
 import itertools

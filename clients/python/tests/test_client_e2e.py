@@ -1,4 +1,6 @@
-"""The Python client against the real gatekeeperd on a loopback port (Debian's python3-grpcio)."""
+"""The Python client against the real gatekeeperd on a loopback port (Debian's python3-grpcio).
+
+Run by ../run_tests.sh on the package as pip-installed into a throwaway venv."""
 import hashlib
 import os
 import signal
@@ -23,11 +25,18 @@ class DaemonTest(unittest.TestCase):
         port_file = os.path.join(cls.data, "port")
         cls.proc = subprocess.Popen([DAEMON, "--listen", "127.0.0.1:0", "--data-dir", cls.data, "--port-file", port_file,
                                      "--log-level", "warn", "--drain-seconds", "1"])
+        port = ""
         for _ in range(400):
-            if os.path.exists(port_file) and open(port_file).read().strip():
-                break
+            if os.path.exists(port_file):
+                with open(port_file) as f:
+                    port = f.read().strip()
+                if port:
+                    break
             time.sleep(0.025)
-        cls.address = "127.0.0.1:" + open(port_file).read().strip()
+        else:
+            cls.proc.kill()
+            raise RuntimeError(f"{DAEMON} wrote no port file in 10 s")
+        cls.address = "127.0.0.1:" + port
         cls.stub, cls.channel = connect(cls.address)
 
     @classmethod
@@ -54,7 +63,8 @@ class DaemonTest(unittest.TestCase):
         self.assertIn("target_angle_deg", err.exception.details())
 
     def test_streamed_upload_and_part_info(self):
-        data = open(os.path.join(SHARED, "meshes", "fcl", "rob.obj"), "rb").read()
+        with open(os.path.join(SHARED, "meshes", "fcl", "rob.obj"), "rb") as f:
+            data = f.read()
         header = pb.UploadHeader(name="rob.obj", format="obj", size_bytes=len(data), sha256=hashlib.sha256(data).hexdigest())
 
         def chunks():

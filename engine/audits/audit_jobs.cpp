@@ -1,0 +1,129 @@
+#include "engine/audits/audit_jobs.h"
+
+#include <spdlog/spdlog.h>
+
+namespace gk::engine {
+
+AuditJobs::AuditJobs(PartRegistry& parts, EndedAudits* archive, Options options)
+    : parts_(parts), archive_(archive), ended_in_memory_(std::max<std::size_t>(1, options.ended_in_memory)),
+      pool_(options.concurrent, options.queued) {}
+
+AuditJobs::~AuditJobs() {
+  cancel_all();
+  pool_.stop();
+}
+
+void AuditJobs::stop() {
+  cancel_all();
+  pool_.stop();
+}
+
+Result<std::string> AuditJobs::start(const SceneRecord& scene, const AuditOptions& options, const std::string& baseline_id) {
+  std::shared_ptr<const AuditJob> baseline;
+  if (!baseline_id.empty()) {
+    auto base = get(baseline_id);
+    if (!base.ok()) return Error{base.error().code, "baseline_job_id", base.error().message};
+    if (base.value()->scene().id != scene.id) return invalid_argument("baseline_job_id", "audited another scene");
+    if (base.value()->snapshot().status != AuditStatus::kDone)
+      return Error{ErrorCode::kFailedPrecondition, "baseline_job_id", "has not finished"};
+    // The baseline's answers carry over only when they were computed with the same options.
+    const std::vector<std::string> then = base.value()->answer_options();
+    const std::vector<std::string> now = AuditJob(scene, options).answer_options();
+    for (std::size_t i = 0; i < now.size(); ++i)
+      if (i >= then.size() || then[i] != now[i]) {
+        const std::string name = now[i].substr(0, now[i].find('='));
+        return Error{ErrorCode::kFailedPrecondition, name,
+                     "the baseline was audited with " + (i < then.size() ? then[i] : std::string("unknown options")) +
+                         ", this audit asks " + now[i] + "; re-audit against a baseline with the same options, or audit in full"};
+      }
+    baseline = base.value();
+  }
+  auto job = std::make_shared<AuditJob>(scene, options, baseline);
+  const std::string id = add(job);
+  const bool queued = pool_.try_submit([this, job, id] {
+    try {
+      job->run(parts_, [&](const AuditSnapshot& final_state) {
+        if (!archive_) return;
+        auto saved = archive_->save(id, *job, final_state);
+        if (!saved.ok()) spdlog::warn("audit {} not archived (kept in memory): {}", id, saved.error().to_string());
+        else archived(id);
+      });
+    } catch (const std::exception& e) {
+      job->fail_unexpectedly(e.what());
+    } catch (...) {
+      job->fail_unexpectedly("unexpected error of unknown type");
+    }
+  });
+  if (!queued) {
+    remove(id);
+    return Error{ErrorCode::kResourceExhausted, "audit", "audit queue full: retry later"};
+  }
+  return id;
+}
+
+void AuditJobs::archived(const std::string& id) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!archive_ || jobs_.count(id) == 0) return;
+  ended_.remove(id);
+  ended_.push_back(id);
+  drop_beyond_limit();
+}
+
+void AuditJobs::drop_beyond_limit() {
+  while (ended_.size() > ended_in_memory_) {
+    jobs_.erase(ended_.front());
+    ended_.pop_front();
+  }
+}
+
+std::size_t AuditJobs::in_memory() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return jobs_.size();
+}
+
+void AuditJobs::cancel_all() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (auto& [id, job] : jobs_) job->cancel();
+}
+
+void AuditJobs::remove(const std::string& id) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  jobs_.erase(id);
+  ended_.remove(id);
+}
+
+std::string AuditJobs::add(std::shared_ptr<AuditJob> job) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  // Unique across restarts too (a job that was running when the daemon stopped is not archived,
+  // so a counter alone would hand its id to the next job): the daemon's start time, then a count.
+  const std::string id = "audit-" + std::to_string(epoch_ms_) + "-" + std::to_string(++counter_);
+  jobs_[id] = std::move(job);
+  return id;
+}
+
+Result<std::shared_ptr<AuditJob>> AuditJobs::get(const std::string& id) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = jobs_.find(id);
+    if (it != jobs_.end()) {
+      if (std::find(ended_.begin(), ended_.end(), id) != ended_.end()) {
+        ended_.remove(id);  // read again: the most recently read now
+        ended_.push_back(id);
+      }
+      return it->second;
+    }
+  }
+  if (!archive_) return Error{ErrorCode::kNotFound, "job_id", "no audit job '" + id + "'"};
+  auto loaded = archive_->load(id);  // outside the lock: a database read
+  if (!loaded.ok()) return loaded.error();
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto [it, fresh] = jobs_.insert({id, loaded.value()});
+  std::shared_ptr<AuditJob> job = it->second;
+  if (fresh) {
+    ended_.push_back(id);
+    drop_beyond_limit();
+  }
+  return job;
+}
+
+}  // namespace gk::engine

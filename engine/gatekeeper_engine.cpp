@@ -1,0 +1,144 @@
+#include "engine/gatekeeper_engine.h"
+
+#include "engine/audits/audit_request.h"
+#include "engine/input_checks.h"
+
+#include <cmath>
+#include <set>
+#include <spdlog/spdlog.h>
+
+namespace gk::engine {
+namespace {
+
+Result<bool> check_clearance(double clearance_mm) {
+  if (!std::isfinite(clearance_mm) || clearance_mm < 0.0) return invalid_argument("clearance_mm", "must be a finite distance >= 0");
+  return true;
+}
+
+}  // namespace
+
+Engine::Engine(MachineRegistry& machines, PartRegistry& parts, SceneStore& scenes, EndedAudits* archive, EngineOptions options)
+    : machines_(machines), parts_(parts), scenes_(scenes), options_(options), steps_(machines, parts, options.step_answers_kept),
+      audits_(parts, archive, options.audits) {}
+
+Result<ClearanceResult> Engine::clearance(const ClearanceRequest& request, const StopToken& stop) {
+  return clearance_query(request, parts_, scenes_, stop);
+}
+
+Result<std::unique_ptr<PartUpload>> Engine::begin_upload(const std::string& name, const std::string& format,
+                                                         std::uint64_t size_bytes, const std::string& sha256_hex) {
+  if (auto bad = check_label(name, "header.name"); !bad.ok()) return bad.error();
+  return parts_.store().begin(name, format, size_bytes, sha256_hex);
+}
+
+Result<PartRecord> Engine::finish_upload(std::unique_ptr<PartUpload> upload) {
+  auto record = parts_.store().finish(std::move(upload), [](const std::string& path, PartRecord r) -> Result<PartRecord> {
+    auto mesh = PartRegistry::read_any(path, r.format, kPartDeflectionMm);
+    if (!mesh.ok()) return mesh.error();
+    r.triangles = static_cast<std::uint32_t>(mesh.value().triangle_count());
+    r.bounds_min = mesh.value().bounds().min;
+    r.bounds_max = mesh.value().bounds().max;
+    r.closed = mesh.value().is_closed_oriented();
+    return r;
+  });
+  if (record.ok())
+    spdlog::info("stored part {} ({} bytes, {} triangles)", record.value().id, record.value().size_bytes, record.value().triangles);
+  return record;
+}
+
+Result<PartRecord> Engine::part(const std::string& part_id) const { return parts_.store().get(part_id); }
+
+Result<MachineSnapshot> Engine::machine(const std::string& machine_id) const { return machines_.get(machine_id); }
+
+Result<MachineSnapshot> Engine::set_machine_state(const std::string& machine_id, const p4::MachineState& state) {
+  auto m = machines_.get(machine_id);
+  if (!m.ok()) return m.error();
+  if (auto valid = p4::validate_state(m.value().model, state); !valid.ok())
+    return invalid_argument("state." + valid.error().field, valid.error().message);
+  auto set = machines_.set_state(machine_id, state);
+  if (!set.ok()) return set.error();
+  return machines_.get(machine_id);
+}
+
+Result<MachineSnapshot> Engine::put_machine_model(const std::string& machine_id, const std::string& model_toml) {
+  if (auto bad = check_id(machine_id, "machine_id"); !bad.ok()) return bad.error();
+  return machines_.put_model(machine_id, model_toml);
+}
+
+Result<SceneRecord> Engine::create_scene(const std::string& name) {
+  if (auto bad = check_label(name, "name"); !bad.ok()) return bad.error();
+  return scenes_.create(name);
+}
+
+Result<bool> Engine::check_object(const SceneObjectRecord& o, const std::string& field) const {
+  if (!o.id.empty())
+    if (auto bad = check_id(o.id, field + ".object_id"); !bad.ok()) return bad;
+  for (const auto& [text, name] : {std::pair<const std::string*, const char*>{&o.name, ".name"}, {&o.category, ".category"},
+                                   {&o.group, ".group"}})
+    if (auto bad = check_label(*text, field + name); !bad.ok()) return bad;
+  auto part = parts_.store().get(o.part_id);
+  if (!part.ok()) return Error{part.error().code, field + ".part_id", part.error().message};
+  return true;
+}
+
+Result<PlacedMove> Engine::put_object(const std::string& scene_id, SceneObjectRecord object, double clearance_mm,
+                                      const StopToken& stop) {
+  if (auto bad = check_object(object, "object"); !bad.ok()) return bad.error();
+  if (auto bad = check_clearance(clearance_mm); !bad.ok()) return bad.error();
+  auto stored = scenes_.put(scene_id, std::move(object));
+  if (!stored.ok()) return stored.error();
+  // Stored once; then the new object's contacts, as a move would answer them.
+  auto scene = scenes_.get(scene_id);
+  if (!scene.ok()) return scene.error();
+  auto outcome = object_contacts(scene.value(), stored.value().id, clearance_mm, parts_, stop);
+  if (!outcome.ok()) return outcome.error();
+  return PlacedMove{stored.value().id, std::move(outcome).value()};
+}
+
+Result<std::vector<SceneObjectRecord>> Engine::put_objects(const std::string& scene_id, std::vector<SceneObjectRecord> objects) {
+  std::set<std::string> known_parts;
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const std::string field = "objects[" + std::to_string(i) + "]";
+    const SceneObjectRecord& o = objects[i];
+    if (!o.id.empty())
+      if (auto bad = check_id(o.id, field + ".object_id"); !bad.ok()) return bad.error();
+    for (const auto& [text, name] : {std::pair<const std::string*, const char*>{&o.name, ".name"}, {&o.category, ".category"},
+                                     {&o.group, ".group"}})
+      if (auto bad = check_label(*text, field + name); !bad.ok()) return bad.error();
+    if (known_parts.count(o.part_id)) continue;
+    auto part = parts_.store().get(o.part_id);
+    if (!part.ok()) return Error{part.error().code, field + ".part_id", part.error().message};
+    known_parts.insert(o.part_id);
+  }
+  return scenes_.put_many(scene_id, std::move(objects));
+}
+
+Result<MoveOutcome> Engine::move_object(const std::string& scene_id, const std::string& object_id, const StoredPose& pose,
+                                        double clearance_mm, DragSession* drag, const StopToken& stop) {
+  if (auto bad = check_clearance(clearance_mm); !bad.ok()) return bad.error();
+  auto moved = scenes_.move(scene_id, object_id, pose);
+  if (!moved.ok()) return moved.error();
+  if (drag) {
+    auto version = scenes_.version(scene_id);
+    if (!version.ok()) return version.error();
+    return drag->move(scene_id, version.value(), [&] { return scenes_.get(scene_id); }, object_id, clearance_mm,
+                      pose.transform(), parts_);
+  }
+  auto scene = scenes_.get(scene_id);
+  if (!scene.ok()) return scene.error();
+  return object_contacts(scene.value(), object_id, clearance_mm, parts_, stop);
+}
+
+Result<SceneRecord> Engine::delete_object(const std::string& scene_id, const std::string& object_id) {
+  return scenes_.remove(scene_id, object_id);
+}
+
+Result<std::string> Engine::start_audit(const std::string& scene_id, const AuditOptions& asked, const std::string& baseline_job_id) {
+  auto options = checked_audit_options(asked, options_.audit_threads);
+  if (!options.ok()) return options.error();
+  auto scene = scenes_.get(scene_id);
+  if (!scene.ok()) return scene.error();
+  return audits_.start(scene.value(), options.value(), baseline_job_id);
+}
+
+}  // namespace gk::engine

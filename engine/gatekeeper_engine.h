@@ -1,0 +1,97 @@
+// The gatekeeper without gRPC: every question the service answers, as plain requests and
+// results with typed errors (an error names the field that was wrong). The daemon's server/
+// translates its protocol to these calls and nothing else; tests, batch drivers and tools call
+// them directly. It holds the stores (parts, scenes, machines) it is given and owns the audit
+// jobs and the ValidateStep answer cache.
+#pragma once
+
+#include "engine/audits/audit_jobs.h"
+#include "engine/clearance/clearance_query.h"
+#include "engine/machines/machine_registry.h"
+#include "engine/parts/part_registry.h"
+#include "engine/parts/part_store.h"
+#include "engine/scenes/drag_session.h"
+#include "engine/scenes/object_contacts.h"
+#include "engine/scenes/scene_store.h"
+#include "engine/steps/step_answers.h"
+#include "kernel/stop_token.h"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace gk::engine {
+
+struct EngineOptions {
+  AuditJobs::Options audits;
+  int audit_threads = 2;                  // threads of one audit job (an audit asking for 0)
+  std::size_t step_answers_kept = 100000;  // the ValidateStep answer cache
+};
+
+// A stored object with its contacts at its new place.
+struct PlacedMove {
+  std::string object_id;
+  MoveOutcome outcome;
+};
+
+class Engine {
+ public:
+  // archive may be null: ended audits then live in memory only.
+  Engine(MachineRegistry& machines, PartRegistry& parts, SceneStore& scenes, EndedAudits* archive, EngineOptions options = {});
+
+  // --- ValidateStep
+  StepAnswers& steps() { return steps_; }
+
+  // --- ClearanceQuery
+  Result<ClearanceResult> clearance(const ClearanceRequest& request, const StopToken& stop = {});
+
+  // --- parts: an upload is begun (its header checked), fed, then finished (hash checked, the
+  // file read and described, recorded durably).
+  Result<std::unique_ptr<PartUpload>> begin_upload(const std::string& name, const std::string& format, std::uint64_t size_bytes,
+                                                   const std::string& sha256_hex);
+  Result<PartRecord> finish_upload(std::unique_ptr<PartUpload> upload);
+  Result<PartRecord> part(const std::string& part_id) const;
+
+  // --- machines
+  std::vector<MachineSnapshot> machines() const { return machines_.list(); }
+  Result<MachineSnapshot> machine(const std::string& machine_id) const;  // "" : the default
+  Result<MachineSnapshot> set_machine_state(const std::string& machine_id, const p4::MachineState& state);
+  Result<MachineSnapshot> put_machine_model(const std::string& machine_id, const std::string& model_toml);
+
+  // --- scenes
+  Result<SceneRecord> create_scene(const std::string& name);
+  Result<SceneRecord> scene(const std::string& scene_id) const { return scenes_.get(scene_id); }
+  // Stores the object (an empty id gets a new one), then answers its contacts as a move would.
+  Result<PlacedMove> put_object(const std::string& scene_id, SceneObjectRecord object, double clearance_mm,
+                                const StopToken& stop = {});
+  // All or nothing: every object is checked (fields named objects[i]...) before any is stored.
+  Result<std::vector<SceneObjectRecord>> put_objects(const std::string& scene_id, std::vector<SceneObjectRecord> objects);
+  // Stores the new pose, then answers the contacts (through the drag's session when there is one).
+  Result<MoveOutcome> move_object(const std::string& scene_id, const std::string& object_id, const StoredPose& pose,
+                                  double clearance_mm, DragSession* drag = nullptr, const StopToken& stop = {});
+  Result<SceneRecord> delete_object(const std::string& scene_id, const std::string& object_id);
+
+  // --- audits
+  Result<std::string> start_audit(const std::string& scene_id, const AuditOptions& asked, const std::string& baseline_job_id = "");
+  Result<std::shared_ptr<AuditJob>> audit(const std::string& job_id) { return audits_.get(job_id); }
+  AuditJobs& audits() { return audits_; }
+
+  // --- what the daemon reports about itself
+  std::uint64_t parts_stored() const { return parts_.store().count(); }
+  PartRegistry::MemoryStats part_memory() const { return parts_.memory_stats(); }
+
+  // Stops the audit threads (running audits end CANCELLED and are archived).
+  void stop() { audits_.stop(); }
+
+ private:
+  Result<bool> check_object(const SceneObjectRecord& object, const std::string& field) const;
+
+  MachineRegistry& machines_;
+  PartRegistry& parts_;
+  SceneStore& scenes_;
+  EngineOptions options_;
+  StepAnswers steps_;
+  AuditJobs audits_;
+};
+
+}  // namespace gk::engine

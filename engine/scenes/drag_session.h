@@ -1,0 +1,38 @@
+// A drag: the layout session (kernel/layout_session) that answers each frame of one object's
+// drag in a scene.
+#pragma once
+
+#include "engine/parts/part_registry.h"
+#include "engine/scenes/object_contacts.h"
+#include "engine/scenes/scene_store.h"
+#include "kernel/layout_session.h"
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace gk::engine {
+
+// A drag stream's layout session (kernel/layout_session): built on the first move of an object,
+// kept while the stream drags the same object with the same clearance and nobody else edits the
+// scene, rebuilt otherwise.
+class DragSession {
+ public:
+  // After the move is stored: the scene's version then, and how to read the whole scene (only
+  // called when the session must be rebuilt: a copy of 10,000 objects costs milliseconds).
+  Result<MoveOutcome> move(const std::string& scene_id, std::uint64_t scene_version,
+                           const std::function<Result<SceneRecord>()>& read_scene, const std::string& object_id,
+                           double clearance_mm, const RigidTransform& pose, PartRegistry& parts);
+
+ private:
+  std::unique_ptr<LayoutSession> session_;
+  std::vector<std::shared_ptr<const LoadedPart>> parts_;  // object index -> part
+  std::vector<std::string> ids_;  // object index -> id
+  std::string scene_id_, object_id_;
+  double clearance_mm_ = -1.0;
+  std::uint64_t version_ = 0;     // the scene version the session reflects
+};
+
+}  // namespace gk::engine

@@ -1,0 +1,65 @@
+// Scenes for layout tools: named objects (an uploaded part at a pose) kept in memory and in the
+// SQLite database beside the parts, so an acknowledged change survives a restart.
+#pragma once
+
+#include "kernel/rigid_transform.h"
+#include "kernel/status.h"
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+struct sqlite3;
+
+namespace gk::engine {
+
+struct StoredPose {
+  Vec3 translation = Vec3::Zero();
+  Vec3 axis = Vec3::UnitZ();
+  double angle_deg = 0.0;
+  RigidTransform transform() const;
+};
+
+struct SceneObjectRecord {
+  std::string id, name, category, part_id;
+  StoredPose pose;
+  std::string group;
+};
+
+struct SceneRecord {
+  std::string id, name;
+  std::map<std::string, SceneObjectRecord> objects;
+  std::uint64_t version = 0;  // in memory: counts the changes since the daemon started
+};
+
+class SceneStore {
+ public:
+  static Result<std::unique_ptr<SceneStore>> open(const std::string& directory);
+  ~SceneStore();
+
+  Result<SceneRecord> create(const std::string& name);
+  Result<SceneRecord> get(const std::string& scene_id) const;
+  // The scene's change counter alone (no copy of its objects): how a drag knows nobody else edited.
+  Result<std::uint64_t> version(const std::string& scene_id) const;
+  // Inserts or replaces; an empty object id gets a new one. Returns the stored object.
+  Result<SceneObjectRecord> put(const std::string& scene_id, SceneObjectRecord object);
+  // All or nothing, in one transaction; returns the stored objects (with their ids) in order.
+  Result<std::vector<SceneObjectRecord>> put_many(const std::string& scene_id, std::vector<SceneObjectRecord> objects);
+  Result<SceneObjectRecord> move(const std::string& scene_id, const std::string& object_id, const StoredPose& pose);
+  Result<SceneRecord> remove(const std::string& scene_id, const std::string& object_id);
+
+ private:
+  SceneStore() = default;
+  Result<bool> write_object(const std::string& scene_id, const SceneObjectRecord& o);
+  std::string new_id(const char* prefix);
+
+  sqlite3* db_ = nullptr;
+  mutable std::mutex mutex_;
+  std::map<std::string, SceneRecord> scenes_;
+  unsigned long long counter_ = 0;
+};
+
+}  // namespace gk::engine

@@ -1,0 +1,212 @@
+// The server's shared structures under concurrent use, in process. ThreadSanitizer cannot look
+// through Debian's gRPC (it is not instrumented: a TSan build of the daemon reports thousands of
+// races inside gRPC's own call machinery), so this suite is what scripts/sanitizers.sh runs under
+// TSan for the server; in the Release suite it checks that every answer is still right.
+#include "engine/machines/machine_registry.h"
+#include "engine/parts/part_registry.h"
+#include "engine/parts/part_store.h"
+#include "engine/steps/step_answers.h"
+#include "engine/work_pool.h"
+
+#include <gtest/gtest.h>
+#include <openssl/sha.h>
+
+#include <atomic>
+#include <cmath>
+#include <optional>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <thread>
+#include <vector>
+
+namespace gk::engine {
+namespace {
+
+std::string temp_dir(const std::string& tag) {
+  const auto dir = std::filesystem::temp_directory_path() / ("gk-concurrency-" + tag + "-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir.string();
+}
+
+std::string sha256_hex(const std::string& bytes) {
+  unsigned char digest[SHA256_DIGEST_LENGTH];
+  SHA256(reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size(), digest);
+  std::string hex;
+  char two[3];
+  for (unsigned char b : digest) {
+    std::snprintf(two, sizeof two, "%02x", b);
+    hex += two;
+  }
+  return hex;
+}
+
+// A flat grid of n x n squares (2 n^2 triangles) as OBJ text: parts of different sizes.
+std::string grid_obj(int n) {
+  std::string obj;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) obj += "v " + std::to_string(i) + " " + std::to_string(j) + " 0\n";
+  auto at = [&](int i, int j) { return std::to_string(j * (n + 1) + i + 1); };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      obj += "f " + at(i, j) + " " + at(i + 1, j) + " " + at(i + 1, j + 1) + "\n";
+      obj += "f " + at(i, j) + " " + at(i + 1, j + 1) + " " + at(i, j + 1) + "\n";
+    }
+  return obj;
+}
+
+TEST(EngineConcurrency, PartLoadsRacingEvictionEachAnswerTheirOwnPart) {
+  const std::string dir = temp_dir("parts");
+  auto store = PartStore::open(dir).value();
+  // About two of the four parts fit: loads keep evicting each other.
+  PartRegistry registry(*store, dir + "/bvh-cache", 2 * 2 * 20 * 20 * PartRegistry::kBytesPerTriangle);
+  std::map<std::string, std::uint32_t> triangles;
+  for (int n : {10, 20, 30, 40}) {
+    const std::string bytes = grid_obj(n);
+    auto upload = store->begin("grid" + std::to_string(n), "obj", bytes.size(), sha256_hex(bytes)).value();
+    ASSERT_TRUE(upload->append(bytes).ok());
+    auto record = store->finish(std::move(upload), [](const std::string& path, PartRecord r) -> Result<PartRecord> {
+      auto mesh = PartRegistry::read_any(path, "obj", 0.05);
+      if (!mesh.ok()) return mesh.error();
+      r.triangles = static_cast<std::uint32_t>(mesh.value().triangle_count());
+      return r;
+    });
+    ASSERT_TRUE(record.ok()) << record.error().to_string();
+    triangles[record.value().id] = static_cast<std::uint32_t>(2 * n * n);
+  }
+  std::vector<std::string> ids;
+  for (const auto& [id, count] : triangles) ids.push_back(id);
+  std::atomic<int> wrong{0}, failed{0};
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 8; ++t)
+    threads.emplace_back([&, t] {
+      for (int i = 0; i < 150; ++i) {
+        const std::string& id = ids[static_cast<std::size_t>(t * 7 + i) % ids.size()];
+        auto part = registry.load(id, 0.05);
+        if (!part.ok()) {
+          ++failed;
+          continue;
+        }
+        if (part.value()->mesh->triangle_count() != triangles[id] || part.value()->bvh->mesh().triangle_count() != triangles[id])
+          ++wrong;
+      }
+    });
+  for (auto& t : threads) t.join();
+  EXPECT_EQ(failed.load(), 0);
+  EXPECT_EQ(wrong.load(), 0);
+  const auto memory = registry.memory_stats();
+  EXPECT_GT(memory.evicted, 0u);
+  EXPECT_TRUE(memory.parts == 1 || memory.bytes <= 2 * 2 * 20 * 20 * PartRegistry::kBytesPerTriangle) << memory.parts << " " << memory.bytes;
+  std::filesystem::remove_all(dir);
+}
+
+TEST(EngineConcurrency, AWorkPoolRunsEveryAcceptedJobOnceEvenWhileStopping) {
+  WorkPool pool(3, 50);
+  std::atomic<int> accepted{0}, ran{0};
+  std::vector<std::thread> submitters;
+  for (int t = 0; t < 4; ++t)
+    submitters.emplace_back([&] {
+      for (int i = 0; i < 2000; ++i)
+        if (pool.try_submit([&] { ++ran; })) ++accepted;
+    });
+  std::thread stopper([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    pool.stop();
+  });
+  for (auto& t : submitters) t.join();
+  stopper.join();
+  pool.stop();
+  EXPECT_EQ(ran.load(), accepted.load());
+  EXPECT_FALSE(pool.try_submit([] {})) << "a stopped pool accepts nothing";
+}
+
+// A part store, its registry and the machines (the embedded default), in a temporary directory.
+struct StepStores {
+  explicit StepStores(const std::string& tag)
+      : store(PartStore::open(temp_dir(tag)).value()), parts(*store, temp_dir(tag + "-bvh")),
+        machines(MachineRegistry::create().value()) {}
+  std::unique_ptr<PartStore> store;
+  PartRegistry parts;
+  std::unique_ptr<MachineRegistry> machines;
+};
+
+// The one ValidateStep answer cache, shared by every thread, kept small so that writers clear it
+// under the readers: every answer, from the cache or validated, equals the one computed alone.
+TEST(EngineConcurrency, StepAnswersFromManyThreadsEqualTheAnswersComputedAlone) {
+  StepStores stores("steps");
+  PartRegistry& parts = stores.parts;
+  MachineRegistry& machine_registry = *stores.machines;
+  std::vector<StepQuestion> questions;
+  for (int i = 0; i < 12; ++i) {
+    StepQuestion q;
+    q.part.spec = {1000.0, 800.0, 1.5, {}, {}};
+    q.step.kind = i % 2 == 0 ? p4::StepKind::kBendUp : p4::StepKind::kBendDown;
+    q.step.bend_point_mm = Vec2(0.0, 650.0 + 10.0 * i);
+    q.step.bend_direction = Vec2(1.0, 0.0);
+    q.step.target_angle_deg = 30.0 + 10.0 * i;
+    q.with_corrections = false;
+    questions.push_back(q);
+  }
+  std::vector<p4::StepAnswer> alone;
+  {
+    StepAnswers fresh(machine_registry, parts);
+    for (const StepQuestion& q : questions) {
+      auto a = fresh.validate(q);
+      ASSERT_TRUE(a.ok()) << a.error().to_string();
+      alone.push_back(a.value().answer);
+    }
+  }
+  StepAnswers shared(machine_registry, parts, 4);
+  std::atomic<int> wrong{0}, cached{0};
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t)
+    threads.emplace_back([&, t] {
+      for (int i = 0; i < 60; ++i) {
+        const std::size_t k = static_cast<std::size_t>(i * 5 + t) % questions.size();
+        std::optional<StepReply> reply;
+        if (t % 2 == 1) reply = shared.cached(questions[k]);
+        if (reply) ++cached;
+        else if (auto v = shared.validate(questions[k]); v.ok()) reply = v.value();
+        if (!reply || reply->answer.verdict != alone[k].verdict || reply->answer.collisions.size() != alone[k].collisions.size() ||
+            reply->answer.min_clearance_mm != alone[k].min_clearance_mm)
+          ++wrong;
+      }
+    });
+  for (auto& t : threads) t.join();
+  EXPECT_EQ(wrong.load(), 0);
+  EXPECT_GT(cached.load(), 0) << "the readers never found an answer in the cache";
+}
+
+// A question differing from a cached one in a single bit of one field is not answered from the
+// cache (the key is the question's bytes, not a hash).
+TEST(EngineConcurrency, AQuestionOneBitAwayIsNotAnsweredFromTheCache) {
+  StepStores stores("bit");
+  PartRegistry& parts = stores.parts;
+  MachineRegistry& machine_registry = *stores.machines;
+  StepAnswers answers(machine_registry, parts);
+  StepQuestion q;
+  q.part.spec = {1000.0, 800.0, 1.5, {}, {}};
+  q.step.kind = p4::StepKind::kBendUp;
+  q.step.bend_point_mm = Vec2(0.0, 700.0);
+  q.step.target_angle_deg = 90.0;
+  ASSERT_TRUE(answers.validate(q).ok());
+  ASSERT_TRUE(answers.cached(q).has_value());
+  StepQuestion other = q;
+  other.step.target_angle_deg = std::nextafter(90.0, 91.0);
+  EXPECT_FALSE(answers.cached(other).has_value());
+  other = q;
+  other.part.spec.thickness_mm = std::nextafter(1.5, 2.0);
+  EXPECT_FALSE(answers.cached(other).has_value());
+  other = q;
+  other.state = p4::MachineState{};
+  other.state->engaged_segments.assign(machine_registry.get("").value().model.aba.segment_widths_mm.size(), true);
+  other.state->engaged_segments[0] = false;
+  EXPECT_FALSE(answers.cached(other).has_value());
+  other = q;
+  other.with_corrections = !q.with_corrections;
+  EXPECT_FALSE(answers.cached(other).has_value());
+}
+
+}  // namespace
+}  // namespace gk::engine

@@ -1,0 +1,333 @@
+// The service without a socket: GatekeeperService over a real engine (stores in a temporary
+// directory), served on gRPC's in-process channel. Every RPC is called here with inputs whose
+// answers are known independently (closed-form distances and contact angles, counts); the same
+// service is also tested through the real daemon on loopback (gatekeeperd_e2e_tests).
+#include "engine/gatekeeper_engine.h"
+#include "server/audit_archive.h"
+#include "server/gatekeeper_service.h"
+#include "tests/server/daemon_fixture.h"
+#include "kernel/units.h"
+
+#include <gtest/gtest.h>
+#include <grpcpp/grpcpp.h>
+
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <string>
+
+namespace gk::server {
+namespace {
+
+namespace pb = ::gatekeeper::v1;
+using testing::bend_request;
+
+// Stores, engine and service in process; the stub talks to it through an in-process channel.
+class InProcessService {
+ public:
+  explicit InProcessService(const std::string& tag) : dir_(testing::temp_dir("inproc-" + tag)) {
+    store_ = engine::PartStore::open(dir_).value();
+    parts_ = std::make_unique<engine::PartRegistry>(*store_, dir_ + "/bvh-cache");
+    machines_ = engine::MachineRegistry::create(dir_ + "/machines").value();
+    scenes_ = engine::SceneStore::open(dir_).value();
+    archive_ = AuditArchive::open(dir_).value();
+    engine_ = std::make_unique<engine::Engine>(*machines_, *parts_, *scenes_, archive_.get());
+    service_ = std::make_unique<GatekeeperService>(*engine_, ServiceOptions{});
+    grpc::ServerBuilder builder;
+    builder.RegisterService(service_.get());
+    server_ = builder.BuildAndStart();
+    stub_ = pb::Gatekeeper::NewStub(server_->InProcessChannel(grpc::ChannelArguments()));
+  }
+  ~InProcessService() {
+    server_->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(5));
+    service_->stop_work();
+  }
+  pb::Gatekeeper::Stub& stub() { return *stub_; }
+
+ private:
+  std::string dir_;
+  std::unique_ptr<engine::PartStore> store_;
+  std::unique_ptr<engine::PartRegistry> parts_;
+  std::unique_ptr<engine::MachineRegistry> machines_;
+  std::unique_ptr<engine::SceneStore> scenes_;
+  std::unique_ptr<AuditArchive> archive_;
+  std::unique_ptr<engine::Engine> engine_;
+  std::unique_ptr<GatekeeperService> service_;
+  std::unique_ptr<grpc::Server> server_;
+  std::unique_ptr<pb::Gatekeeper::Stub> stub_;
+};
+
+std::unique_ptr<grpc::ClientContext> context() {
+  auto ctx = std::make_unique<grpc::ClientContext>();
+  ctx->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+  return ctx;
+}
+
+
+pb::Pose at(double x, double y, double z) {
+  pb::Pose p;
+  p.mutable_translation()->set_x_mm(x);
+  p.mutable_translation()->set_y_mm(y);
+  p.mutable_translation()->set_z_mm(z);
+  return p;
+}
+
+TEST(ServiceInProcess, ValidateStepAndValidateStepsAnswerTheBeamAtItsClosedFormAngle) {
+  InProcessService s("validate");
+  pb::ValidateStepResponse low, tall, again;
+  ASSERT_TRUE(s.stub().ValidateStep(context().get(), bend_request(150.0, 90.0), &low).ok());
+  EXPECT_EQ(low.verdict(), pb::CLEAR);
+  ASSERT_TRUE(s.stub().ValidateStep(context().get(), bend_request(300.0, 90.0), &tall).ok());
+  ASSERT_EQ(tall.verdict(), pb::COLLISION);
+  ASSERT_GT(tall.collisions_size(), 0);
+  // A 300 mm flange turning up meets the beam's underside 203 mm above the table (0.1 mm clearance).
+  EXPECT_NEAR(tall.collisions(0).first_contact_deg(), std::asin((203.0 - 0.1) / 300.0) * 180.0 / kPi, 0.01);
+  ASSERT_TRUE(s.stub().ValidateStep(context().get(), bend_request(300.0, 90.0), &again).ok());
+  EXPECT_EQ(again.decided_by(), "cache");
+  EXPECT_EQ(again.verdict(), pb::COLLISION);
+  pb::ValidateStepsRequest batch;
+  *batch.add_steps() = bend_request(100.0, 90.0);
+  *batch.add_steps() = bend_request(300.0, 90.0);
+  *batch.add_steps() = bend_request(120.0, 90.0);
+  batch.set_stop_at_first_failure(true);
+  pb::ValidateStepsResponse steps;
+  ASSERT_TRUE(s.stub().ValidateSteps(context().get(), batch, &steps).ok());
+  EXPECT_EQ(steps.first_failure(), 1);
+  EXPECT_EQ(steps.results_size(), 2);
+  pb::ValidateStepResponse bad;
+  const grpc::Status refused = s.stub().ValidateStep(context().get(), bend_request(100.0, std::nan("")), &bad);
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(refused.error_message().find("target_angle_deg"), std::string::npos) << refused.error_message();
+}
+
+TEST(ServiceInProcess, UploadPartGetPartInfoAndClearanceQueryAgreeWithTheBoxesDistance) {
+  InProcessService s("clearance");
+  const std::string box = testing::box_obj(0, 0, 0, 100, 100, 100);
+  pb::PartInfo info;
+  ASSERT_TRUE(testing::upload_part(s.stub(), box, "obj", &info).ok());
+  EXPECT_EQ(info.triangles(), 12u);
+  pb::GetPartInfoRequest get;
+  get.set_part_id(info.part_id());
+  pb::PartInfo again;
+  ASSERT_TRUE(s.stub().GetPartInfo(context().get(), get, &again).ok());
+  EXPECT_EQ(again.part_id(), info.part_id());
+  EXPECT_TRUE(again.closed());
+  // Two unit-100 cubes 3 mm apart along x and 4 mm along y (edges parallel): 5 mm, exactly.
+  pb::ClearanceQueryRequest q;
+  q.mutable_a()->set_part_id(info.part_id());
+  *q.mutable_a()->mutable_pose() = at(50000.0, 0.0, 0.0);
+  q.mutable_b()->set_part_id(info.part_id());
+  *q.mutable_b()->mutable_pose() = at(50103.0, 104.0, 0.0);
+  q.set_safety_gap_mm(10.0);
+  pb::ClearanceQueryResponse apart;
+  ASSERT_TRUE(s.stub().ClearanceQuery(context().get(), q, &apart).ok());
+  EXPECT_EQ(apart.verdict(), pb::CLEAR);
+  EXPECT_NEAR(apart.distance_mm(), 5.0, 1e-9);
+  EXPECT_TRUE(apart.gap_violated());
+  EXPECT_GT(apart.regions_size(), 0);
+  // Overlapping by 2 mm in x: COLLISION, the depth along -x is 2 mm and the shared volume 2*100*100.
+  *q.mutable_b()->mutable_pose() = at(50098.0, 0.0, 0.0);
+  q.set_compute_depth(true);
+  q.mutable_depth_along()->set_x_mm(1.0);
+  q.set_compute_volume(true);
+  pb::ClearanceQueryResponse crossing;
+  ASSERT_TRUE(s.stub().ClearanceQuery(context().get(), q, &crossing).ok());
+  EXPECT_EQ(crossing.verdict(), pb::COLLISION);
+  EXPECT_NEAR(crossing.depth_mm(), 2.0, 1e-3);
+  EXPECT_LE(std::abs(crossing.interference_volume_mm3() - 20000.0), crossing.volume_error_bound_mm3() + 1e-6);
+  // A bad field is named.
+  q.set_safety_gap_mm(-1.0);
+  pb::ClearanceQueryResponse refused_answer;
+  const grpc::Status refused = s.stub().ClearanceQuery(context().get(), q, &refused_answer);
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(refused.error_message().find("safety_gap_mm"), std::string::npos);
+}
+
+TEST(ServiceInProcess, MachinesAreListedReadStateSetAndModelsPut) {
+  InProcessService s("machines");
+  pb::ListMachinesResponse list;
+  ASSERT_TRUE(s.stub().ListMachines(context().get(), pb::ListMachinesRequest(), &list).ok());
+  ASSERT_EQ(list.machines_size(), 1);
+  EXPECT_EQ(list.machines(0).machine_id(), "p4-default");
+  const pb::MachineInfo& m = list.machines(0);
+  pb::GetMachineRequest get;
+  get.set_machine_id("p4-default");
+  pb::MachineInfo info;
+  ASSERT_TRUE(s.stub().GetMachine(context().get(), get, &info).ok());
+  EXPECT_EQ(info.aba_segments(), m.aba_segments());
+  // One segment disengaged: the state reads back as set.
+  pb::SetMachineStateRequest set;
+  set.set_machine_id("p4-default");
+  for (std::uint32_t i = 0; i < info.aba_segments(); ++i) set.mutable_state()->add_engaged_segments(i != 3);
+  set.mutable_state()->set_clamp_z_mm(1.5);
+  set.mutable_state()->set_manipulator_y_mm(-400.0);
+  pb::MachineInfo after;
+  ASSERT_TRUE(s.stub().SetMachineState(context().get(), set, &after).ok());
+  ASSERT_EQ(after.state().engaged_segments_size(), static_cast<int>(info.aba_segments()));
+  EXPECT_FALSE(after.state().engaged_segments(3));
+  // A state with the wrong number of segments is refused, naming the field.
+  set.mutable_state()->add_engaged_segments(true);
+  pb::MachineInfo refused_info;
+  const grpc::Status refused = s.stub().SetMachineState(context().get(), set, &refused_info);
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(refused.error_message().find("state."), std::string::npos) << refused.error_message();
+  // The default model stored again under another id: a second machine, with the same segments.
+  pb::PutMachineModelRequest put;
+  put.set_machine_id("p4-copy");
+  put.set_model_toml(info.model_toml());
+  pb::MachineInfo copy;
+  ASSERT_TRUE(s.stub().PutMachineModel(context().get(), put, &copy).ok());
+  EXPECT_EQ(copy.aba_segments(), info.aba_segments());
+  put.set_machine_id("bad id with spaces");
+  const grpc::Status bad_id = s.stub().PutMachineModel(context().get(), put, &copy);
+  EXPECT_EQ(bad_id.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(bad_id.error_message().find("machine_id"), std::string::npos);
+}
+
+TEST(ServiceInProcess, SceneObjectsArePutMovedDraggedDeletedAndRead) {
+  InProcessService s("scenes");
+  pb::PartInfo info;
+  ASSERT_TRUE(testing::upload_part(s.stub(), testing::box_obj(0, 0, 0, 100, 100, 100), "obj", &info).ok());
+  pb::CreateSceneRequest create;
+  create.set_name("cell 7");
+  pb::SceneInfo scene;
+  ASSERT_TRUE(s.stub().CreateScene(context().get(), create, &scene).ok());
+  pb::PutObjectsRequest batch;
+  batch.set_scene_id(scene.scene_id());
+  for (int i = 0; i < 3; ++i) {
+    pb::SceneObject* o = batch.add_objects();
+    o->set_object_id("box-" + std::to_string(i));
+    o->set_part_id(info.part_id());
+    *o->mutable_pose() = at(1000.0 * i, 0.0, 0.0);
+  }
+  pb::PutObjectsResponse stored;
+  ASSERT_TRUE(s.stub().PutObjects(context().get(), batch, &stored).ok());
+  EXPECT_EQ(stored.object_ids_size(), 3);
+  // A fourth, 0.5 mm beside box-1: CLEAR within the 2 mm clearance, at exactly 0.5 mm.
+  pb::PutObjectRequest put;
+  put.set_scene_id(scene.scene_id());
+  put.mutable_object()->set_object_id("box-new");
+  put.mutable_object()->set_part_id(info.part_id());
+  *put.mutable_object()->mutable_pose() = at(1100.5, 0.0, 0.0);
+  put.set_clearance_mm(2.0);
+  pb::MoveResult placed;
+  ASSERT_TRUE(s.stub().PutObject(context().get(), put, &placed).ok());
+  ASSERT_EQ(placed.contacts_size(), 1);
+  EXPECT_EQ(placed.contacts(0).other_object_id(), "box-1");
+  EXPECT_NEAR(placed.contacts(0).distance_mm(), 0.5, 1e-9);
+  // Moved 10 mm into box-2: COLLISION with box-2 only.
+  pb::MoveObjectRequest move;
+  move.set_scene_id(scene.scene_id());
+  move.set_object_id("box-new");
+  *move.mutable_pose() = at(1910.0, 0.0, 0.0);
+  pb::MoveResult moved;
+  ASSERT_TRUE(s.stub().MoveObject(context().get(), move, &moved).ok());
+  EXPECT_EQ(moved.verdict(), pb::COLLISION);
+  ASSERT_EQ(moved.contacts_size(), 1);
+  EXPECT_EQ(moved.contacts(0).other_object_id(), "box-2");
+  // Dragged out along x in three frames (10 mm up and aside, so that no edges coincide): colliding,
+  // touching (its face on box-2's), then clear.
+  auto ctx = context();
+  auto drag = s.stub().DragObject(ctx.get());
+  const pb::Verdict expected[] = {pb::COLLISION, pb::TOUCHING, pb::CLEAR};
+  const double xs[] = {1950.0, 2100.0, 2150.0};
+  for (int i = 0; i < 3; ++i) {
+    pb::MoveObjectRequest frame = move;
+    *frame.mutable_pose() = at(xs[i], 10.0, 10.0);
+    ASSERT_TRUE(drag->Write(frame));
+    pb::MoveResult answer;
+    ASSERT_TRUE(drag->Read(&answer));
+    EXPECT_EQ(answer.verdict(), expected[i]) << "frame " << i;
+  }
+  drag->WritesDone();
+  EXPECT_TRUE(drag->Finish().ok());
+  pb::DeleteObjectRequest del;
+  del.set_scene_id(scene.scene_id());
+  del.set_object_id("box-0");
+  pb::SceneInfo after_delete;
+  ASSERT_TRUE(s.stub().DeleteObject(context().get(), del, &after_delete).ok());
+  EXPECT_EQ(after_delete.objects_size(), 3);
+  pb::GetSceneRequest get;
+  get.set_scene_id(scene.scene_id());
+  pb::SceneInfo read;
+  ASSERT_TRUE(s.stub().GetScene(context().get(), get, &read).ok());
+  EXPECT_EQ(read.objects_size(), 3);
+  EXPECT_EQ(read.name(), "cell 7");
+  // A label with a NUL is refused, naming the field, and nothing is stored.
+  pb::PutObjectsRequest bad = batch;
+  bad.mutable_objects(1)->set_name(std::string("a\0b", 3));
+  const grpc::Status refused = s.stub().PutObjects(context().get(), bad, &stored);
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(refused.error_message().find("objects[1].name"), std::string::npos) << refused.error_message();
+}
+
+TEST(ServiceInProcess, AnAuditIsStartedWatchedReportedAndCancelled) {
+  InProcessService s("audit");
+  pb::PartInfo info;
+  ASSERT_TRUE(testing::upload_part(s.stub(), testing::box_obj(0, 0, 0, 100, 100, 100), "obj", &info).ok());
+  pb::CreateSceneRequest create;
+  pb::SceneInfo scene;
+  ASSERT_TRUE(s.stub().CreateScene(context().get(), create, &scene).ok());
+  // Ten boxes in a row 90 mm apart (each overlaps the next by 10 mm): 9 colliding pairs, no other.
+  pb::PutObjectsRequest batch;
+  batch.set_scene_id(scene.scene_id());
+  for (int i = 0; i < 10; ++i) {
+    pb::SceneObject* o = batch.add_objects();
+    o->set_part_id(info.part_id());
+    o->set_category(i % 2 == 0 ? "robot" : "fence");
+    *o->mutable_pose() = at(90.0 * i, 0.0, 0.0);
+  }
+  pb::PutObjectsResponse stored;
+  ASSERT_TRUE(s.stub().PutObjects(context().get(), batch, &stored).ok());
+  pb::StartAuditRequest start;
+  start.set_scene_id(scene.scene_id());
+  const pb::AuditReport report = testing::run_audit(s.stub(), start, /*html=*/true);
+  EXPECT_EQ(report.progress().state(), pb::DONE);
+  ASSERT_EQ(report.clashes_size(), 9);
+  for (const pb::Clash& c : report.clashes()) EXPECT_EQ(c.verdict(), pb::COLLISION);
+  ASSERT_EQ(report.by_category_size(), 1);
+  EXPECT_EQ(report.by_category(0).key(), "fence / robot");
+  EXPECT_EQ(report.by_category(0).clashes(), 9u);
+  EXPECT_NE(report.html().find("<html"), std::string::npos);
+  // Cancelling an ended job leaves it as it ended.
+  pb::CancelAuditRequest cancel;
+  cancel.set_job_id(report.progress().job_id());
+  pb::AuditProgress progress;
+  ASSERT_TRUE(s.stub().CancelAudit(context().get(), cancel, &progress).ok());
+  EXPECT_EQ(progress.state(), pb::DONE);
+  // A re-audit against it with another clearance is refused, naming the option.
+  start.set_baseline_job_id(report.progress().job_id());
+  start.set_clearance_mm(5.0);
+  pb::AuditJob job;
+  const grpc::Status refused = s.stub().StartAudit(context().get(), start, &job);
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_NE(refused.error_message().find("clearance"), std::string::npos) << refused.error_message();
+  pb::WatchAuditRequest watch;
+  watch.set_job_id("audit-unknown");
+  auto watch_ctx = context();
+  auto reader = s.stub().WatchAudit(watch_ctx.get(), watch);
+  pb::AuditProgress nothing;
+  EXPECT_FALSE(reader->Read(&nothing));
+  EXPECT_EQ(reader->Finish().error_code(), grpc::StatusCode::NOT_FOUND);
+}
+
+TEST(ServiceInProcess, GetServerInfoCountsTheCallsItServed) {
+  InProcessService s("info");
+  pb::ListMachinesResponse list;
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(s.stub().ListMachines(context().get(), pb::ListMachinesRequest(), &list).ok());
+  pb::ServerInfo info;
+  ASSERT_TRUE(s.stub().GetServerInfo(context().get(), pb::GetServerInfoRequest(), &info).ok());
+  EXPECT_EQ(info.machines_size(), 1);
+  EXPECT_EQ(info.parts_stored(), 0u);
+  bool found = false;
+  for (const pb::RpcStats& r : info.rpcs())
+    if (r.method() == "ListMachines") {
+      found = true;
+      EXPECT_EQ(r.calls(), 3u);
+      EXPECT_EQ(r.errors(), 0u);
+    }
+  EXPECT_TRUE(found);
+}
+
+}  // namespace
+}  // namespace gk::server
