@@ -2,6 +2,7 @@
 
 #include "engine/audits/audit_request.h"
 #include "engine/input_checks.h"
+#include "kernel/tolerances.h"
 
 #include <cmath>
 #include <set>
@@ -11,7 +12,8 @@ namespace gk::engine {
 namespace {
 
 Result<bool> check_clearance(double clearance_mm) {
-  if (!std::isfinite(clearance_mm) || clearance_mm < 0.0) return invalid_argument("clearance_mm", "must be a finite distance >= 0");
+  if (!std::isfinite(clearance_mm) || clearance_mm < 0.0 || clearance_mm > tolerances::kMaxCoordinateMm)
+    return invalid_argument("clearance_mm", "must be a distance from 0 to 1e7 mm");
   return true;
 }
 
@@ -96,12 +98,15 @@ Result<PlacedMove> Engine::put_object(const std::string& scene_id, SceneObjectRe
 }
 
 Result<std::vector<SceneObjectRecord>> Engine::put_objects(const std::string& scene_id, std::vector<SceneObjectRecord> objects) {
-  std::set<std::string> known_parts;
+  std::set<std::string> known_parts, ids;
   for (std::size_t i = 0; i < objects.size(); ++i) {
     const std::string field = "objects[" + std::to_string(i) + "]";
     const SceneObjectRecord& o = objects[i];
-    if (!o.id.empty())
+    if (!o.id.empty()) {
       if (auto bad = check_id(o.id, field + ".object_id"); !bad.ok()) return bad.error();
+      // Two objects of one batch under one id: one would silently replace the other.
+      if (!ids.insert(o.id).second) return invalid_argument(field + ".object_id", "'" + o.id + "' appears twice in the batch");
+    }
     for (const auto& [text, name] : {std::pair<const std::string*, const char*>{&o.name, ".name"}, {&o.category, ".category"},
                                      {&o.group, ".group"}})
       if (auto bad = check_label(*text, field + name); !bad.ok()) return bad.error();

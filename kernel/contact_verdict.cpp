@@ -11,6 +11,32 @@ namespace gk {
 namespace {
 
 
+// Two coplanar triangles: do their interiors share area? Decided exactly on their projection to
+// the coordinate plane their common normal is most nearly along (dropping a coordinate keeps the
+// written values): the interiors are apart exactly when one of the six edge lines has the other
+// triangle entirely on its outer side, boundary included.
+bool coplanar_interiors_overlap(const Triangle& ta, const Triangle& tb) {
+  const Vec3 n = (ta[1] - ta[0]).cross(ta[2] - ta[0]);
+  int drop = 0;
+  if (std::fabs(n.y()) > std::fabs(n[drop])) drop = 1;
+  if (std::fabs(n.z()) > std::fabs(n[drop])) drop = 2;
+  const int u = drop == 0 ? 1 : 0, w = drop == 2 ? 1 : 2;
+  const auto separated_by_an_edge_of = [&](const Triangle& t, const Triangle& other) {
+    for (int e = 0; e < 3; ++e) {
+      const Vec3& p = t[e];
+      const Vec3& q = t[(e + 1) % 3];
+      const Vec3& r = t[(e + 2) % 3];
+      const int inner = exact::orient2d(p[u], p[w], q[u], q[w], r[u], r[w]);
+      if (inner == 0) return false;  // a degenerate projection: no verdict from it (stays a crossing)
+      bool all_outside = true;
+      for (const Vec3& v : other) all_outside = all_outside && exact::orient2d(p[u], p[w], q[u], q[w], v[u], v[w]) * inner <= 0;
+      if (all_outside) return true;
+    }
+    return false;
+  };
+  return !separated_by_an_edge_of(ta, tb) && !separated_by_an_edge_of(tb, ta);
+}
+
 // Is the intersecting pair (ta, tb), both in A's frame and wound outward, a contact from outside?
 bool is_outside_contact(const Triangle& ta, const Triangle& tb, const Contact& c) {
   int a_below_b = 0, b_below_a = 0, a_on_b = 0;
@@ -23,7 +49,11 @@ bool is_outside_contact(const Triangle& ta, const Triangle& tb, const Contact& c
   if (a_on_b == 3) {
     const Vec3 na = (ta[1] - ta[0]).cross(ta[2] - ta[0]);
     const Vec3 nb = (tb[1] - tb[0]).cross(tb[2] - tb[0]);
-    return na.dot(nb) < 0.0;  // coplanar: opposite normals touch, equal normals overlap
+    // Coplanar: opposite normals touch; equal normals overlap where their interiors share area
+    // (both solids then lie on the same side of a shared piece of surface) and only touch where
+    // they meet along an edge or at a corner (two boxes side by side, their faces flush).
+    if (na.dot(nb) < 0.0) return true;
+    return !coplanar_interiors_overlap(ta, tb);
   }
   if (a_below_b == 0 || b_below_a == 0) return true;
   return (c.segment_end - c.segment_start).norm() <= tolerances::kPointContactMm;

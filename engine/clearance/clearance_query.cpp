@@ -39,6 +39,8 @@ struct PosedSide {
 Result<PosedSide> resolve(const ClearanceSide& in, const std::string& side, PartRegistry& parts, SceneStore& scenes) {
   std::string part_id = in.part_id;
   RigidTransform pose = in.pose;
+  if (!in.object_id.empty() && !in.part_id.empty())
+    return invalid_argument(side + ".part_id", "give a part at a pose or a scene object (scene_id, object_id), not both");
   if (!in.object_id.empty()) {
     auto scene = scenes.get(in.scene_id);
     if (!scene.ok()) return Error{scene.error().code, side + ".scene_id", scene.error().message};

@@ -105,10 +105,22 @@ Result<StepReply> StepAnswers::validate(const StepQuestion& q) {
   if (q.state)
     if (auto valid = p4::validate_state(machine.value().model, *q.state); !valid.ok())
       return invalid_argument("state." + valid.error().field, valid.error().message);
-  auto validator = machines_.validator(machine.value().id, q.state ? &*q.state : nullptr);
+  // The state the key was made with, never the machine's state read again: a SetMachineState
+  // between the two reads would store this state's answer under the other's key (a false CLEAR
+  // once the machine is back in that state).
+  const p4::MachineState& state = q.state ? *q.state : machine.value().state;
+  auto validator = machines_.validator(machine.value().id, &state);
   if (!validator.ok()) return validator.error();
   auto answer = validator.value()->validate(part.value(), q.step, q.with_corrections);
-  if (!answer.ok()) return answer.error();
+  if (!answer.ok()) {
+    // What the validator refuses is the step (its bend line, its motion): named as a field of it.
+    Error e = answer.error();
+    if (e.code == ErrorCode::kInvalidArgument && !e.field.empty() && e.field.rfind("step.", 0) != 0) e.field = "step." + e.field;
+    return e;
+  }
+  // A model replaced meanwhile: the answer is this caller's, not the old version's to keep.
+  auto now = machines_.get(q.machine_id);
+  if (!now.ok() || now.value().version != machine.value().version) return StepReply{std::move(answer).value(), false};
   std::lock_guard<std::mutex> lock(mutex_);
   if (answers_.size() >= capacity_) answers_.clear();  // simple and bounded; a miss only costs time
   answers_[key.value()] = answer.value();

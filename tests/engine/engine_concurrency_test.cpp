@@ -208,5 +208,62 @@ TEST(EngineConcurrency, AQuestionOneBitAwayIsNotAnsweredFromTheCache) {
   EXPECT_FALSE(answers.cached(other).has_value());
 }
 
+// A question without a state of its own is asked in the machine's current state while another
+// thread keeps changing it: every cached answer must be the one for the state it is filed under.
+// (The state was once read twice, for the key and for the validator: a change between the reads
+// filed a CLEAR under a state in which the step collides.)
+TEST(EngineConcurrency, AnswersFiledUnderTheCurrentStateAreThatStatesWhileItChanges) {
+  StepStores stores("state-race");
+  MachineRegistry& machines = *stores.machines;
+  const std::size_t segments = machines.get("").value().model.aba.segment_widths_mm.size();
+  p4::MachineState clear_state, colliding_state;
+  clear_state.engaged_segments.assign(segments, true);
+  clear_state.clamp_z_mm = 1.0;
+  clear_state.manipulator_y_mm = -400.0;
+  colliding_state = clear_state;
+  colliding_state.manipulator_y_mm = -300.0;  // the manipulator 100 mm nearer the bend line
+  StepQuestion q;
+  q.part.spec = {1000.0, 600.0, 1.0, {}, {}};
+  q.step.kind = p4::StepKind::kBendUp;
+  q.step.bend_point_mm = Vec2(0.0, 450.0);  // a 150 mm flange
+  q.step.bend_direction = Vec2(1.0, 0.0);
+  q.step.target_angle_deg = 90.0;
+  q.with_corrections = false;
+  // The oracle: each state asked explicitly, alone.
+  std::map<int, Verdict> truth;
+  {
+    StepAnswers alone(machines, stores.parts);
+    for (int k = 0; k < 2; ++k) {
+      StepQuestion explicit_q = q;
+      explicit_q.state = k == 0 ? clear_state : colliding_state;
+      truth[k] = alone.validate(explicit_q).value().answer.verdict;
+    }
+  }
+  ASSERT_NE(truth[0], truth[1]) << "the two states must answer differently for this test to mean anything";
+  StepAnswers shared(machines, stores.parts, 1);  // one answer kept: most asks validate
+  std::atomic<bool> done{false};
+  std::thread toggler([&] {
+    for (int i = 0; !done; ++i) ASSERT_TRUE(machines.set_state("", i % 2 == 0 ? clear_state : colliding_state).ok());
+  });
+  int wrong = 0;
+  for (int i = 0; i < 5000; ++i) {
+    auto reply = shared.validate(q);
+    ASSERT_TRUE(reply.ok());
+    // Whatever state it was asked in, the answer now filed under each state must be that state's.
+    for (int k = 0; k < 2 && i % 50 == 0; ++k) {
+      StepQuestion explicit_state = q;
+      explicit_state.state = k == 0 ? clear_state : colliding_state;
+      if (auto hit = shared.cached(explicit_state); hit && hit->answer.verdict != truth[k]) ++wrong;
+    }
+  }
+  done = true;
+  toggler.join();
+  for (int k = 0; k < 2; ++k) {
+    ASSERT_TRUE(machines.set_state("", k == 0 ? clear_state : colliding_state).ok());
+    if (auto hit = shared.cached(q); hit && hit->answer.verdict != truth[k]) ++wrong;
+  }
+  EXPECT_EQ(wrong, 0);
+}
+
 }  // namespace
 }  // namespace gk::engine

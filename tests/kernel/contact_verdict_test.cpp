@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace gk {
 namespace {
 
@@ -25,6 +27,29 @@ TEST(ContactVerdict, BoxesStackedFaceToFaceTouch) {
   const auto b = box(Vec3(2, 3, 10), Vec3(6, 7, 14));
   EXPECT_EQ(verdict_of(*a, *b), Verdict::kTouching);
   EXPECT_EQ(verdict_of(*b, *a), Verdict::kTouching);
+}
+
+// Equal boxes side by side: their faces meet flush and their side faces lie in common planes,
+// meeting there only along an edge. Interiors apart: TOUCHING (it was a false COLLISION while
+// coplanar faces with equal normals counted as overlapping whatever they shared). Pushed in by the
+// least representable step, or by a micrometre, they collide.
+TEST(ContactVerdict, EqualBoxesSideBySideWithFlushSideFacesTouch) {
+  const auto a = box(Vec3(0, 0, 0), Vec3(100, 100, 100));
+  for (const Vec3& offset : {Vec3(100, 0, 0), Vec3(100, 10, 0), Vec3(0, 0, 100), Vec3(100, 100, 0), Vec3(-100, 0, 0)}) {
+    const auto b = box(Vec3(0, 0, 0), Vec3(100, 100, 100));
+    EXPECT_EQ(verdict_of(*a, *b, RigidTransform::from_translation(offset)), Verdict::kTouching) << offset.transpose();
+    EXPECT_EQ(verdict_of(*b, *a, RigidTransform::from_translation(-offset)), Verdict::kTouching) << offset.transpose();
+  }
+  const auto b = box(Vec3(0, 0, 0), Vec3(100, 100, 100));
+  EXPECT_EQ(verdict_of(*a, *b, RigidTransform::from_translation(Vec3(std::nextafter(100.0, 0.0), 0, 0))), Verdict::kCollision);
+  EXPECT_EQ(verdict_of(*a, *b, RigidTransform::from_translation(Vec3(99.999, 10, 0))), Verdict::kCollision);
+  // Two equal boxes in the same place share every face with equal normals: a collision.
+  EXPECT_EQ(verdict_of(*a, *b), Verdict::kCollision);
+  // A smaller box on A with two side faces flush with A's (equal normals, meeting along an edge):
+  // touching; sunk halfway in, its top face flush with A's: a collision.
+  const auto small = box(Vec3(0, 0, 0), Vec3(50, 50, 50));
+  EXPECT_EQ(verdict_of(*a, *small, RigidTransform::from_translation(Vec3(0, 0, 100))), Verdict::kTouching);
+  EXPECT_EQ(verdict_of(*a, *small, RigidTransform::from_translation(Vec3(0, 0, 50))), Verdict::kCollision);
 }
 
 TEST(ContactVerdict, OverlapGapAndContactTolerance) {

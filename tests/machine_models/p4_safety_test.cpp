@@ -12,6 +12,7 @@
 #include "occt_adapters/shape_builders.h"
 #include "occt_adapters/shape_mesher.h"
 #include "tests/support/random_meshes.h"
+#include "tests/support/sanitized_build.h"
 #include "kernel/units.h"
 
 #include <gtest/gtest.h>
@@ -97,7 +98,7 @@ TEST(P4Safety, HullLevelOfDetailNeverClearsWhatTheExactSweepReaches) {
   int cases = 0, organs_cleared_by_hull = 0, exact_collisions = 0;
   AdvanceOptions adv;
   adv.required_clearance_mm = 0.1;
-  for (int trial = 0; trial < 1000; ++trial) {
+  for (int trial = 0; trial < testing::samples(1000); ++trial) {
     const RandomBend r = random_bend(rng, model);
     ASSERT_TRUE(scene->apply_state(r.state).ok());
     MovingBody body;
@@ -122,8 +123,8 @@ TEST(P4Safety, HullLevelOfDetailNeverClearsWhatTheExactSweepReaches) {
   }
   // The test must exercise both sides of the question.
   EXPECT_GT(cases, 750);
-  EXPECT_GT(organs_cleared_by_hull, 5000);
-  EXPECT_GT(exact_collisions, 100);
+  EXPECT_GT(organs_cleared_by_hull, testing::samples(5000));
+  EXPECT_GT(exact_collisions, testing::samples(100));
   RecordProperty("cases", cases);
   RecordProperty("organs_cleared_by_hull", organs_cleared_by_hull);
   RecordProperty("exact_collisions", exact_collisions);
@@ -227,7 +228,7 @@ TEST(P4Safety, ValidatorAgreesWithPlainAdvancementOnTheWholeBody) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   int compared = 0;
   std::map<std::string, int> skipped;
-  for (int trial = 0; trial < 1200; ++trial) {
+  for (int trial = 0; trial < testing::samples(1200); ++trial) {
     RandomBend r = random_bend(rng, model);
     // The manipulator somewhere over the held side (its limits and static checks are tested
     // elsewhere: only answers decided by the sweep are compared here).
@@ -267,9 +268,9 @@ TEST(P4Safety, ValidatorAgreesWithPlainAdvancementOnTheWholeBody) {
     }
   }
   for (const auto& [why, n] : skipped) RecordProperty("skipped " + why, n);
-  EXPECT_GT(compared, 100);
-  EXPECT_GT(collisions, 30);
-  EXPECT_GT(clears, 30);
+  EXPECT_GT(compared, testing::samples(100));
+  EXPECT_GT(collisions, testing::samples(30));
+  EXPECT_GT(clears, testing::samples(30));
 }
 
 TEST(P4Safety, RefitAnswersExactlyLikeRebuild) {

@@ -225,15 +225,14 @@ TEST(ServiceInProcess, SceneObjectsArePutMovedDraggedDeletedAndRead) {
   EXPECT_EQ(moved.verdict(), pb::COLLISION);
   ASSERT_EQ(moved.contacts_size(), 1);
   EXPECT_EQ(moved.contacts(0).other_object_id(), "box-2");
-  // Dragged out along x in three frames (10 mm up and aside, so that no edges coincide): colliding,
-  // touching (its face on box-2's), then clear.
+  // Dragged out along x in three frames: colliding, touching (face on face, side faces flush), then clear.
   auto ctx = context();
   auto drag = s.stub().DragObject(ctx.get());
   const pb::Verdict expected[] = {pb::COLLISION, pb::TOUCHING, pb::CLEAR};
   const double xs[] = {1950.0, 2100.0, 2150.0};
   for (int i = 0; i < 3; ++i) {
     pb::MoveObjectRequest frame = move;
-    *frame.mutable_pose() = at(xs[i], 10.0, 10.0);
+    *frame.mutable_pose() = at(xs[i], 0.0, 0.0);
     ASSERT_TRUE(drag->Write(frame));
     pb::MoveResult answer;
     ASSERT_TRUE(drag->Read(&answer));
@@ -253,6 +252,27 @@ TEST(ServiceInProcess, SceneObjectsArePutMovedDraggedDeletedAndRead) {
   ASSERT_TRUE(s.stub().GetScene(context().get(), get, &read).ok());
   EXPECT_EQ(read.objects_size(), 3);
   EXPECT_EQ(read.name(), "cell 7");
+  // One id twice in a batch, a clearance beyond 1e7 mm: refused, naming the field.
+  pb::PutObjectsRequest twice = batch;
+  twice.mutable_objects(1)->set_object_id("box-0");
+  grpc::Status refused_twice = s.stub().PutObjects(context().get(), twice, &stored);
+  EXPECT_EQ(refused_twice.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(refused_twice.error_message().find("objects[1].object_id"), std::string::npos) << refused_twice.error_message();
+  pb::MoveObjectRequest far = move;
+  far.set_clearance_mm(1e300);
+  const grpc::Status refused_far = s.stub().MoveObject(context().get(), far, &moved);
+  EXPECT_EQ(refused_far.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(refused_far.error_message().find("clearance_mm"), std::string::npos) << refused_far.error_message();
+  // A clearance side naming both a part and a scene object is ambiguous: refused.
+  pb::ClearanceQueryRequest both;
+  both.mutable_a()->set_part_id(info.part_id());
+  both.mutable_a()->set_scene_id(scene.scene_id());
+  both.mutable_a()->set_object_id("box-1");
+  both.mutable_b()->set_part_id(info.part_id());
+  pb::ClearanceQueryResponse unanswered;
+  const grpc::Status refused_both = s.stub().ClearanceQuery(context().get(), both, &unanswered);
+  EXPECT_EQ(refused_both.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(refused_both.error_message().find("a.part_id"), std::string::npos) << refused_both.error_message();
   // A label with a NUL is refused, naming the field, and nothing is stored.
   pb::PutObjectsRequest bad = batch;
   bad.mutable_objects(1)->set_name(std::string("a\0b", 3));
