@@ -2,9 +2,9 @@
 // verdict, minimum distance with witnesses, contacts, and how long each query took.
 //
 //   gatekeeper-mesh-check A.stl B.obj [--move X Y Z] [--rotate-deg AX AY AZ ANGLE] [--gap MM]
-#include "kernel/contact_verdict.h"
-#include "kernel/mesh_bvh.h"
-#include "kernel/mesh_distance.h"
+#include "kernel/query/contact_verdict.h"
+#include "kernel/bvh/mesh_bvh.h"
+#include "kernel/query/mesh_distance.h"
 #include "mesh_io/mesh_file_reader.h"
 
 #include <chrono>

@@ -19,7 +19,7 @@ install(TARGETS gatekeeperd gatekeeper-cli gatekeeper-mesh-check RUNTIME DESTINA
 # Public headers, as the sources include them.
 foreach(dir kernel mesh_io occt_adapters machine_models engine clients/gatekeeper_client)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/${dir}/ DESTINATION include/gatekeeper/${dir}
-    FILES_MATCHING PATTERN "*.h")
+    FILES_MATCHING PATTERN "*.h" PATTERN "internal" EXCLUDE)
 endforeach()
 install(FILES ${PROJECT_BINARY_DIR}/proto/gatekeeper/v1/gatekeeper.pb.h ${PROJECT_BINARY_DIR}/proto/gatekeeper/v1/gatekeeper.grpc.pb.h
   DESTINATION include/gatekeeper/gatekeeper/v1)

@@ -2,7 +2,7 @@
 
 #include "engine/audits/audit_request.h"
 #include "engine/input_checks.h"
-#include "kernel/tolerances.h"
+#include "kernel/core/tolerances.h"
 
 #include <cmath>
 #include <set>

@@ -14,7 +14,7 @@
 #include "engine/scenes/object_contacts.h"
 #include "engine/scenes/scene_store.h"
 #include "engine/steps/step_answers.h"
-#include "kernel/stop_token.h"
+#include "kernel/core/stop_token.h"
 
 #include <memory>
 #include <string>

@@ -1,7 +1,7 @@
 // What a client may name things: checked before anything is stored.
 #pragma once
 
-#include "kernel/status.h"
+#include "kernel/core/status.h"
 
 #include <cstddef>
 #include <string>

@@ -6,8 +6,8 @@
 // transforms composed in double; its buffers must be inside the file (data: URIs or a .glb).
 #pragma once
 
-#include "kernel/status.h"
-#include "kernel/triangle_mesh.h"
+#include "kernel/core/status.h"
+#include "kernel/mesh/triangle_mesh.h"
 
 #include <string_view>
 #include <vector>

@@ -1,6 +1,6 @@
 #include "mesh_io/mesh_file_reader.h"
 
-#include "kernel/content_hash.h"
+#include "kernel/core/content_hash.h"
 
 #include "mesh_io/format_readers.h"
 

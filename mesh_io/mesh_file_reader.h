@@ -4,8 +4,8 @@
 // glTF with Assimp (its data are float32 by definition: put a factory offset in the pose).
 #pragma once
 
-#include "kernel/status.h"
-#include "kernel/triangle_mesh.h"
+#include "kernel/core/status.h"
+#include "kernel/mesh/triangle_mesh.h"
 
 #include <string>
 

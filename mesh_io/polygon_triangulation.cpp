@@ -1,7 +1,7 @@
 #include "mesh_io/polygon_triangulation.h"
 
-#include "kernel/exact_predicates.h"
-#include "kernel/units.h"
+#include "kernel/predicates/exact_predicates.h"
+#include "kernel/core/units.h"
 
 #include <array>
 #include <cmath>

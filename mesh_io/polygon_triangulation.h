@@ -7,8 +7,8 @@
 // has no triangles that cover it as written and is refused.
 #pragma once
 
-#include "kernel/status.h"
-#include "kernel/triangle_mesh.h"
+#include "kernel/core/status.h"
+#include "kernel/mesh/triangle_mesh.h"
 
 #include <cstdint>
 #include <vector>

@@ -2,7 +2,7 @@
 // nearest double (std::from_chars: correctly rounded, locale-free).
 #pragma once
 
-#include "kernel/status.h"
+#include "kernel/core/status.h"
 
 #include <charconv>
 #include <cstdlib>

@@ -1,7 +1,7 @@
 #include "occt_adapters/brep_contact.h"
 
-#include "kernel/tolerances.h"
-#include "kernel/triangle_distance.h"
+#include "kernel/core/tolerances.h"
+#include "kernel/query/triangle_distance.h"
 
 #include "occt_adapters/face_pair_descent.h"
 #include "occt_adapters/occt_errors.h"

@@ -9,9 +9,9 @@
 // comes back empty at factory coordinates.
 #pragma once
 
-#include "kernel/geometry_types.h"
-#include "kernel/rigid_transform.h"
-#include "kernel/status.h"
+#include "kernel/core/geometry_types.h"
+#include "kernel/core/rigid_transform.h"
+#include "kernel/core/status.h"
 #include "occt_adapters/shape.h"
 
 #include <utility>

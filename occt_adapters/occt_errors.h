@@ -2,7 +2,7 @@
 // become an Error naming the operation, so no OCCT exception crosses the module boundary.
 #pragma once
 
-#include "kernel/status.h"
+#include "kernel/core/status.h"
 
 #include <functional>
 #include <string>

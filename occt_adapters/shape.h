@@ -1,7 +1,7 @@
 // An opaque handle to an OCCT B-Rep shape: no OCCT type crosses this header.
 #pragma once
 
-#include "kernel/aabb.h"
+#include "kernel/core/aabb.h"
 
 #include <memory>
 

@@ -2,9 +2,9 @@
 // of a motion (BRepPrimAPI_MakeRevol about an axis, BRepPrimAPI_MakePrism along a vector).
 #pragma once
 
-#include "kernel/geometry_types.h"
-#include "kernel/rigid_transform.h"
-#include "kernel/status.h"
+#include "kernel/core/geometry_types.h"
+#include "kernel/core/rigid_transform.h"
+#include "kernel/core/status.h"
 #include "occt_adapters/shape.h"
 
 #include <vector>

@@ -1,7 +1,7 @@
 // Reads B-Rep parts: STEP (.step/.stp), OCCT BREP (.brep) and IGES (.igs/.iges).
 #pragma once
 
-#include "kernel/status.h"
+#include "kernel/core/status.h"
 #include "occt_adapters/shape.h"
 
 #include <string>

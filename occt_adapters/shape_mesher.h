@@ -1,8 +1,8 @@
 // Tessellation of B-Rep shapes into kernel meshes, keeping each triangle's B-Rep face.
 #pragma once
 
-#include "kernel/status.h"
-#include "kernel/triangle_mesh.h"
+#include "kernel/core/status.h"
+#include "kernel/mesh/triangle_mesh.h"
 #include "occt_adapters/shape.h"
 
 #include <vector>

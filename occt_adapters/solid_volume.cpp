@@ -1,6 +1,6 @@
 #include "occt_adapters/solid_volume.h"
 
-#include "kernel/tolerances.h"
+#include "kernel/core/tolerances.h"
 
 #include <BRepBndLib.hxx>
 #include <BRepBuilderAPI_Copy.hxx>

@@ -16,9 +16,9 @@ PACKAGES=(
   # OCCT's CMake targets link TBB (libtbb.so): without it ninja stops at gatekeeperd
   libtbb-dev
   libeigen3-dev
-  # the one content hash (kernel/content_hash.h): XXH3-128, header-only use
+  # the one content hash (kernel/core/content_hash.h): XXH3-128, header-only use
   libxxhash-dev
-  # the exact mesh volume (kernel/exact_interference_volume): CGAL's corefinement, header-only,
+  # the exact mesh volume (kernel/measure/exact_interference_volume): CGAL's corefinement, header-only,
   # on GMP/MPFR rationals and Boost headers
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev
   # mesh files (STL, OBJ, OFF, PLY, glTF)

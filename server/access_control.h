@@ -12,7 +12,7 @@
 //   decides (one connection may carry the calls of several tokens).
 #pragma once
 
-#include "kernel/status.h"
+#include "kernel/core/status.h"
 
 #include <grpcpp/grpcpp.h>
 

@@ -8,7 +8,7 @@
 #include "gatekeeper/v1/gatekeeper.grpc.pb.h"
 #include "engine/gatekeeper_engine.h"
 #include "engine/work_pool.h"
-#include "kernel/stop_token.h"
+#include "kernel/core/stop_token.h"
 #include "server/engine_names.h"
 #include "server/rpc_stats.h"
 #include "server/upload_slots.h"

@@ -1,7 +1,7 @@
 #include "server/proto_convert.h"
 
-#include "kernel/tolerances.h"
-#include "kernel/units.h"
+#include "kernel/core/tolerances.h"
+#include "kernel/core/units.h"
 
 #include <cctype>
 #include <cmath>

@@ -3,7 +3,7 @@
 #pragma once
 
 #include "gatekeeper/v1/gatekeeper.pb.h"
-#include "kernel/contact_verdict.h"
+#include "kernel/query/contact_verdict.h"
 #include "machine_models/p4/step_validator.h"
 #include "server/engine_names.h"
 

@@ -1,11 +1,11 @@
-// The interference audit of a scene (kernel/scene_audit on a snapshot of it) as a cancellable
+// The interference audit of a scene (engine/audits/scene_audit on a snapshot of it) as a cancellable
 // job with progress; a CAD pair within its deflection is decided again on the exact faces.
 #pragma once
 
 #include "engine/parts/part_registry.h"
 #include "engine/scenes/scene_store.h"
-#include "kernel/contact_verdict.h"
-#include "kernel/scene_audit.h"
+#include "kernel/query/contact_verdict.h"
+#include "engine/audits/scene_audit.h"
 
 #include <atomic>
 #include <chrono>
@@ -49,7 +49,7 @@ struct AuditSnapshot {
   bool reaudit = false;
 };
 
-// One audit job (kernel/scene_audit on the scene's snapshot): runs on a worker, can be cancelled,
+// One audit job (engine/audits/scene_audit on the scene's snapshot): runs on a worker, can be cancelled,
 // keeps its results (partial if cancelled). With a finished baseline job it is a re-audit.
 class AuditJob {
  public:

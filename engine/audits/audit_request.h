@@ -1,7 +1,7 @@
 // An audit as a client asks for it, checked field by field, with the defaults filled in.
 #pragma once
 
-#include "kernel/scene_audit.h"
+#include "engine/audits/scene_audit.h"
 
 namespace gk::engine {
 

@@ -3,12 +3,12 @@
 #include "engine/verdicts/exact_depth.h"
 #include "engine/verdicts/number_text.h"
 #include "engine/verdicts/pair_verdict.h"
-#include "kernel/contact_regions.h"
-#include "kernel/contact_verdict.h"
-#include "kernel/interference_volume.h"
-#include "kernel/mesh_distance.h"
-#include "kernel/penetration_depth.h"
-#include "kernel/tolerances.h"
+#include "kernel/measure/contact_regions.h"
+#include "kernel/query/contact_verdict.h"
+#include "kernel/measure/interference_volume.h"
+#include "kernel/query/mesh_distance.h"
+#include "kernel/measure/penetration_depth.h"
+#include "kernel/core/tolerances.h"
 #include "occt_adapters/brep_contact.h"
 
 #include <algorithm>

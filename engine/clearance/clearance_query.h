@@ -6,9 +6,9 @@
 
 #include "engine/parts/part_registry.h"
 #include "engine/scenes/scene_store.h"
-#include "kernel/aabb.h"
-#include "kernel/contact_verdict.h"
-#include "kernel/stop_token.h"
+#include "kernel/core/aabb.h"
+#include "kernel/query/contact_verdict.h"
+#include "kernel/core/stop_token.h"
 
 #include <cstdint>
 #include <string>

@@ -6,7 +6,7 @@
 // in the daemon: the same deterministic code on the same bytes.
 #pragma once
 
-#include "kernel/status.h"
+#include "kernel/core/status.h"
 
 #include <chrono>
 #include <cstdint>

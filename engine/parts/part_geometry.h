@@ -2,8 +2,8 @@
 // they were tessellated from (the triangles then only say where to look).
 #pragma once
 
-#include "kernel/mesh_bvh.h"
-#include "kernel/rigid_transform.h"
+#include "kernel/bvh/mesh_bvh.h"
+#include "kernel/core/rigid_transform.h"
 #include "occt_adapters/shape.h"
 
 #include <memory>

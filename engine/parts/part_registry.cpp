@@ -1,6 +1,6 @@
 #include "engine/parts/part_registry.h"
 
-#include "kernel/tolerances.h"
+#include "kernel/core/tolerances.h"
 
 #include "mesh_io/mesh_file_reader.h"
 #include "occt_adapters/shape_import.h"

@@ -2,8 +2,8 @@
 #pragma once
 
 #include "engine/parts/part_geometry.h"
-#include "kernel/bvh_cache.h"
-#include "kernel/mesh_bvh.h"
+#include "engine/parts/bvh_cache.h"
+#include "kernel/bvh/mesh_bvh.h"
 #include "occt_adapters/shape.h"
 #include "engine/parts/part_store.h"
 

@@ -3,8 +3,8 @@
 // acknowledged only after both are on disk, so a restart or kill -9 keeps every acknowledged part.
 #pragma once
 
-#include "kernel/geometry_types.h"
-#include "kernel/status.h"
+#include "kernel/core/geometry_types.h"
+#include "kernel/core/status.h"
 
 #include <cstdint>
 #include <functional>

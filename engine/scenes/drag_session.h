@@ -1,11 +1,11 @@
-// A drag: the layout session (kernel/layout_session) that answers each frame of one object's
+// A drag: the layout session (engine/scenes/layout_session) that answers each frame of one object's
 // drag in a scene.
 #pragma once
 
 #include "engine/parts/part_registry.h"
 #include "engine/scenes/object_contacts.h"
 #include "engine/scenes/scene_store.h"
-#include "kernel/layout_session.h"
+#include "engine/scenes/layout_session.h"
 
 #include <cstdint>
 #include <functional>
@@ -15,7 +15,7 @@
 
 namespace gk::engine {
 
-// A drag stream's layout session (kernel/layout_session): built on the first move of an object,
+// A drag stream's layout session (engine/scenes/layout_session): built on the first move of an object,
 // kept while the stream drags the same object with the same clearance and nobody else edits the
 // scene, rebuilt otherwise.
 class DragSession {

@@ -4,8 +4,8 @@
 
 #include "engine/parts/part_registry.h"
 #include "engine/scenes/scene_store.h"
-#include "kernel/contact_verdict.h"
-#include "kernel/stop_token.h"
+#include "kernel/query/contact_verdict.h"
+#include "kernel/core/stop_token.h"
 
 #include <string>
 #include <vector>

@@ -4,7 +4,7 @@
 
 #include "engine/parts/part_registry.h"
 #include "engine/scenes/scene_store.h"
-#include "kernel/scene_audit.h"
+#include "engine/audits/scene_audit.h"
 
 #include <cstdint>
 #include <map>

@@ -1,5 +1,5 @@
 #include "engine/scenes/scene_store.h"
-#include "kernel/units.h"
+#include "kernel/core/units.h"
 
 #include <sqlite3.h>
 

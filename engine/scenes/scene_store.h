@@ -2,8 +2,8 @@
 // SQLite database beside the parts, so an acknowledged change survives a restart.
 #pragma once
 
-#include "kernel/rigid_transform.h"
-#include "kernel/status.h"
+#include "kernel/core/rigid_transform.h"
+#include "kernel/core/status.h"
 
 #include <cstdint>
 #include <map>

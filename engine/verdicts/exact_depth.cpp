@@ -1,7 +1,7 @@
 #include "engine/verdicts/exact_depth.h"
 
 #include "engine/verdicts/pair_verdict.h"
-#include "kernel/tolerances.h"
+#include "kernel/core/tolerances.h"
 
 namespace gk::engine {
 

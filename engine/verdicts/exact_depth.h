@@ -5,8 +5,8 @@
 #pragma once
 
 #include "engine/parts/part_geometry.h"
-#include "kernel/status.h"
-#include "kernel/stop_token.h"
+#include "kernel/core/status.h"
+#include "kernel/core/stop_token.h"
 
 namespace gk::engine {
 

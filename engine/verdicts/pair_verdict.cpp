@@ -2,8 +2,8 @@
 
 #include "engine/verdicts/number_text.h"
 
-#include "kernel/mesh_distance.h"
-#include "kernel/tolerances.h"
+#include "kernel/query/mesh_distance.h"
+#include "kernel/core/tolerances.h"
 #include "occt_adapters/brep_contact.h"
 
 #include <algorithm>

@@ -18,8 +18,8 @@
 #pragma once
 
 #include "engine/parts/part_geometry.h"
-#include "kernel/contact_verdict.h"
-#include "kernel/stop_token.h"
+#include "kernel/query/contact_verdict.h"
+#include "kernel/core/stop_token.h"
 
 #include <optional>
 

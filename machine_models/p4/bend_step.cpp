@@ -1,7 +1,7 @@
 #include "machine_models/p4/bend_step.h"
 
-#include "kernel/tolerances.h"
-#include "kernel/content_hash.h"
+#include "kernel/core/tolerances.h"
+#include "kernel/core/content_hash.h"
 
 #include <cmath>
 #include <limits>

@@ -1,9 +1,9 @@
 // One step of a bend sequence, and where it puts the part in the machine.
 #pragma once
 
-#include "kernel/content_hash.h"
-#include "kernel/rigid_transform.h"
-#include "kernel/status.h"
+#include "kernel/core/content_hash.h"
+#include "kernel/core/rigid_transform.h"
+#include "kernel/core/status.h"
 #include "machine_models/p4/machine_model.h"
 #include "machine_models/p4/sheet_part.h"
 

@@ -5,8 +5,8 @@
 // body that crosses the face deeper than the tolerance, or reaches another face, meets the organ.
 #pragma once
 
-#include "kernel/status.h"
-#include "kernel/triangle_mesh.h"
+#include "kernel/core/status.h"
+#include "kernel/mesh/triangle_mesh.h"
 
 #include <optional>
 

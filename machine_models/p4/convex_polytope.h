@@ -4,8 +4,8 @@
 // their edges) is the exact penetration depth: the shortest translation that separates them.
 #pragma once
 
-#include "kernel/geometry_types.h"
-#include "kernel/rigid_transform.h"
+#include "kernel/core/geometry_types.h"
+#include "kernel/core/rigid_transform.h"
 #include "machine_models/p4/sheet_part.h"
 
 #include <utility>

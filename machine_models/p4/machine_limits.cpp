@@ -1,6 +1,6 @@
 #include "machine_models/p4/machine_limits.h"
 
-#include "kernel/tolerances.h"
+#include "kernel/core/tolerances.h"
 
 #include <algorithm>
 #include <cmath>

@@ -2,8 +2,8 @@
 // beyond one is denied (INCONCLUSIVE with the limit named), never answered CLEAR.
 #pragma once
 
-#include "kernel/geometry_types.h"
-#include "kernel/triangle_mesh.h"
+#include "kernel/core/geometry_types.h"
+#include "kernel/mesh/triangle_mesh.h"
 #include "machine_models/p4/machine_model.h"
 #include "machine_models/p4/machine_state.h"
 #include "machine_models/p4/sheet_part.h"

@@ -1,6 +1,6 @@
 #include "machine_models/p4/machine_model.h"
 
-#include "kernel/tolerances.h"
+#include "kernel/core/tolerances.h"
 
 #include <toml++/toml.h>
 

@@ -1,8 +1,8 @@
 // The P4 machine model: what the data file (p4_default.toml) says, validated.
 #pragma once
 
-#include "kernel/geometry_types.h"
-#include "kernel/status.h"
+#include "kernel/core/geometry_types.h"
+#include "kernel/core/status.h"
 
 #include <string>
 #include <vector>

@@ -2,9 +2,9 @@
 // (BVH::UpdateBounds), never rebuilt, when the state changes.
 #pragma once
 
-#include "kernel/aabb.h"
-#include "kernel/mesh_bvh.h"
-#include "kernel/rigid_transform.h"
+#include "kernel/core/aabb.h"
+#include "kernel/bvh/mesh_bvh.h"
+#include "kernel/core/rigid_transform.h"
 #include "machine_models/p4/machine_model.h"
 #include "machine_models/p4/machine_state.h"
 

@@ -1,6 +1,6 @@
 #include "machine_models/p4/machine_state.h"
 
-#include "kernel/content_hash.h"
+#include "kernel/core/content_hash.h"
 #include "machine_models/p4/machine_model.h"
 
 #include <cmath>

@@ -2,8 +2,8 @@
 // blade positions.
 #pragma once
 
-#include "kernel/content_hash.h"
-#include "kernel/status.h"
+#include "kernel/core/content_hash.h"
+#include "kernel/core/status.h"
 
 #include <cstdint>
 #include <string>

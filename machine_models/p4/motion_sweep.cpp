@@ -1,9 +1,9 @@
 #include "machine_models/p4/motion_sweep.h"
 
-#include "kernel/convex_hull.h"
-#include "kernel/exact_predicates.h"
-#include "kernel/tolerances.h"
-#include "kernel/mesh_distance.h"
+#include "kernel/mesh/convex_hull.h"
+#include "kernel/predicates/exact_predicates.h"
+#include "kernel/core/tolerances.h"
+#include "kernel/query/mesh_distance.h"
 #include "machine_models/p4/organ_geometry.h"
 
 #include <algorithm>

@@ -7,8 +7,8 @@
 //    the motion's rate), so it never steps over a contact and stops at the first one.
 #pragma once
 
-#include "kernel/mesh_bvh.h"
-#include "kernel/rigid_transform.h"
+#include "kernel/bvh/mesh_bvh.h"
+#include "kernel/core/rigid_transform.h"
 #include "machine_models/p4/convex_polytope.h"
 #include "machine_models/p4/machine_scene.h"
 #include "machine_models/p4/sheet_part.h"

@@ -1,7 +1,7 @@
 // Closed meshes of machine organs: convex YZ profiles extruded along X.
 #pragma once
 
-#include "kernel/triangle_mesh.h"
+#include "kernel/mesh/triangle_mesh.h"
 #include "machine_models/p4/machine_model.h"
 
 namespace gk::p4 {

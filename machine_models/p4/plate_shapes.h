@@ -1,8 +1,8 @@
 // Plates as OCCT B-Rep boxes, for the exact phase and for the swept-solid cross-check.
 #pragma once
 
-#include "kernel/rigid_transform.h"
-#include "kernel/status.h"
+#include "kernel/core/rigid_transform.h"
+#include "kernel/core/status.h"
 #include "machine_models/p4/sheet_part.h"
 #include "occt_adapters/shape.h"
 

@@ -1,8 +1,8 @@
 #include "machine_models/p4/sheet_part.h"
 
-#include "kernel/tolerances.h"
-#include "kernel/content_hash.h"
-#include "kernel/units.h"
+#include "kernel/core/tolerances.h"
+#include "kernel/core/content_hash.h"
+#include "kernel/core/units.h"
 
 #include <cmath>
 

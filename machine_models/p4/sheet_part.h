@@ -3,10 +3,10 @@
 // the blank spans X [0, width], Y [0, depth], Z [0, thickness].
 #pragma once
 
-#include "kernel/content_hash.h"
-#include "kernel/rigid_transform.h"
-#include "kernel/status.h"
-#include "kernel/triangle_mesh.h"
+#include "kernel/core/content_hash.h"
+#include "kernel/core/rigid_transform.h"
+#include "kernel/core/status.h"
+#include "kernel/mesh/triangle_mesh.h"
 
 #include <memory>
 #include <string>

@@ -1,12 +1,12 @@
 #include "machine_models/p4/step_validator.h"
 
-#include "kernel/mesh_bvh.h"
-#include "kernel/mesh_distance.h"
+#include "kernel/bvh/mesh_bvh.h"
+#include "kernel/query/mesh_distance.h"
 #include "machine_models/p4/contact_layers.h"
 #include "machine_models/p4/convex_polytope.h"
 #include "machine_models/p4/manipulator_geometry.h"
 #include "machine_models/p4/organ_geometry.h"
-#include "kernel/units.h"
+#include "kernel/core/units.h"
 
 #include <algorithm>
 #include <chrono>

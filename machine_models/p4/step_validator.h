@@ -10,8 +10,8 @@
 // Every answer says which stage decided it and how long each stage took.
 #pragma once
 
-#include "kernel/contact_verdict.h"
-#include "kernel/tolerances.h"
+#include "kernel/query/contact_verdict.h"
+#include "kernel/core/tolerances.h"
 #include "machine_models/p4/bend_step.h"
 #include "machine_models/p4/machine_limits.h"
 #include "machine_models/p4/machine_scene.h"

@@ -4,8 +4,8 @@
 //   e.g. audit_benchmark 10000 100000000 2 50000      (catalogue meshes shared, as in a real twin)
 //        audit_benchmark 2000 10000000 2 50000 1      (every machine its own mesh and BVH)
 //        audit_benchmark 2000 10000000 2 50000 1 DIR  (BVHs from the disk cache in DIR; run twice)
-#include "kernel/broad_phase.h"
-#include "kernel/scene_audit.h"
+#include "kernel/broadphase/broad_phase.h"
+#include "engine/audits/scene_audit.h"
 #include "tests/support/factory_scene.h"
 
 #include <sys/resource.h>
@@ -37,20 +37,20 @@ int main(int argc, char** argv) {
   const auto t0 = std::chrono::steady_clock::now();
   const gk::testing::FactoryScene scene = gk::testing::generate_factory_scene(scene_options);
   const double build_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  gk::AuditOptions options;
+  gk::engine::AuditOptions options;
   options.clearance_mm = 10.0;
   options.threads = threads;
   options.tile_mm = tile;
   options.rules = scene.rules;
-  const auto audit = gk::audit_scene(scene.objects, options);
+  const auto audit = gk::engine::audit_scene(scene.objects, options);
   if (!audit.ok()) {
     std::fprintf(stderr, "%s\n", audit.error().to_string().c_str());
     return 1;
   }
-  const gk::AuditResult& r = audit.value();
+  const gk::engine::AuditResult& r = audit.value();
   // The two broad phases on the whole scene's boxes (the audit runs sweep-and-prune per tile).
   std::vector<gk::Aabb> boxes;
-  for (const gk::AuditObject& o : scene.objects) boxes.push_back(gk::transformed_box(o.mesh->root_bounds(), o.pose));
+  for (const gk::engine::AuditObject& o : scene.objects) boxes.push_back(gk::transformed_box(o.mesh->root_bounds(), o.pose));
   auto t_sap = std::chrono::steady_clock::now();
   const auto sap = gk::sweep_and_prune(boxes, options.clearance_mm);
   const double sap_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_sap).count();
@@ -60,7 +60,7 @@ int main(int argc, char** argv) {
   const double grid_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_grid).count();
   std::map<gk::Verdict, int> verdicts;
   int violations = 0;
-  for (const gk::PairClash& c : r.clashes) {
+  for (const gk::engine::PairClash& c : r.clashes) {
     ++verdicts[c.verdict];
     violations += c.clearance_violation ? 1 : 0;
   }

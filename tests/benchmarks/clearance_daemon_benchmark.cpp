@@ -4,10 +4,10 @@
 // The poses are those of kernel_benchmark's Large_Clearance (gap uniform in [-1, 3] mm, found with
 // the kernel in this process before the timing); the same answer computed in process is timed
 // too, so the table shows what gRPC and the service add. Safety gap 1 mm, as there.
-#include "kernel/contact_regions.h"
-#include "kernel/contact_verdict.h"
-#include "kernel/mesh_bvh.h"
-#include "kernel/mesh_distance.h"
+#include "kernel/measure/contact_regions.h"
+#include "kernel/query/contact_verdict.h"
+#include "kernel/bvh/mesh_bvh.h"
+#include "kernel/query/mesh_distance.h"
 #include "mesh_io/mesh_file_reader.h"
 #include "tests/server/daemon_fixture.h"
 #include "tests/support/near_contact_poses.h"

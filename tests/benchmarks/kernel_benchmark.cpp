@@ -2,11 +2,11 @@
 //   build/tests/benchmarks/kernel_benchmark [--benchmark_filter=...]
 // Every query is timed on its own; the counters give mean, median and p99 per query in
 // microseconds, and a hash of the answers shows both runs computed the same thing.
-#include "kernel/contact_regions.h"
-#include "kernel/contact_verdict.h"
-#include "kernel/mesh_bvh.h"
-#include "kernel/mesh_collision.h"
-#include "kernel/mesh_distance.h"
+#include "kernel/measure/contact_regions.h"
+#include "kernel/query/contact_verdict.h"
+#include "kernel/bvh/mesh_bvh.h"
+#include "kernel/query/mesh_collision.h"
+#include "kernel/query/mesh_distance.h"
 #include "mesh_io/mesh_file_reader.h"
 #include "tests/benchmarks/latency_counters.h"
 #include "tests/support/near_contact_poses.h"

@@ -5,7 +5,7 @@
 // weave: along a bay row, 3 m either side, turning (through robot cells, conveyors, racks);
 // hug: along the first column line, the machine's box 30 mm from the columns' faces, so every
 // column it passes is a candidate for many frames.
-#include "kernel/layout_session.h"
+#include "engine/scenes/layout_session.h"
 #include "tests/support/factory_scene.h"
 
 #include <algorithm>
@@ -25,7 +25,7 @@ int main(int argc, char** argv) {
   std::uint32_t moving = 0;
   while (scene.objects[moving].category != "machine") ++moving;  // the first machine: fandisk, 31,682 triangles
   const auto t_setup = std::chrono::steady_clock::now();
-  auto session = gk::LayoutSession::create(scene.objects, moving, clearance);
+  auto session = gk::engine::LayoutSession::create(scene.objects, moving, clearance);
   if (!session.ok()) {
     std::fprintf(stderr, "%s\n", session.error().to_string().c_str());
     return 1;

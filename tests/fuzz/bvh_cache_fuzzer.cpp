@@ -1,8 +1,8 @@
 // The BVH disk cache is read back by a restarted daemon or an audit: a damaged or foreign file
 // must be refused (and rebuilt over), never trusted. The input is the file's bytes, for a fixed
 // mesh of a few triangles; a tree that is accepted must answer a query without faults.
-#include "kernel/mesh_bvh.h"
-#include "kernel/mesh_distance.h"
+#include "kernel/bvh/mesh_bvh.h"
+#include "kernel/query/mesh_distance.h"
 
 #include <cstdlib>
 #include <fstream>

@@ -3,10 +3,10 @@
 // model (p4_default.toml). Supports and pressing segments are obstacles outside the intended
 // contact layer; the manipulator is a body in every step; machine limits are denied by name;
 // corrections are sub-sequences that the test runs itself, step by step.
-#include "kernel/mesh_distance.h"
+#include "kernel/query/mesh_distance.h"
 #include "machine_models/p4/step_validator.h"
 #include "tests/machine_models/p4_test_engine.h"
-#include "kernel/units.h"
+#include "kernel/core/units.h"
 
 #include <gtest/gtest.h>
 

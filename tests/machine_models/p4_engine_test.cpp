@@ -8,7 +8,7 @@
 #include "occt_adapters/shape_import.h"
 #include "occt_adapters/shape_mesher.h"
 #include "tests/support/random_meshes.h"
-#include "kernel/units.h"
+#include "kernel/core/units.h"
 
 #include <gtest/gtest.h>
 

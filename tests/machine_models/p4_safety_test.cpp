@@ -2,8 +2,8 @@
 //  - the hull level of detail never clears an organ that the exact sweep reaches;
 //  - conservative advancement agrees with the OCCT swept solid (MakeRevol, meshed);
 //  - refitting the organ tree answers exactly like rebuilding it.
-#include "kernel/mesh_collision.h"
-#include "kernel/mesh_distance.h"
+#include "kernel/query/mesh_collision.h"
+#include "kernel/query/mesh_distance.h"
 #include "machine_models/p4/machine_scene.h"
 #include "machine_models/p4/manipulator_geometry.h"
 #include "machine_models/p4/motion_sweep.h"
@@ -13,7 +13,7 @@
 #include "occt_adapters/shape_mesher.h"
 #include "tests/support/random_meshes.h"
 #include "tests/support/sanitized_build.h"
-#include "kernel/units.h"
+#include "kernel/core/units.h"
 
 #include <gtest/gtest.h>
 

@@ -51,7 +51,7 @@
 // Count: 3,000 steps (500 of each kind), about 1.5 - 1.7 min in Release on this 2-core machine (the
 // validator takes ~2.5 s of it, the oracle the rest). P4_ORACLE_CASES overrides the count,
 // P4_ORACLE_SEED the seed, P4_ORACLE_VERBOSE prints every case with the oracle's nearest pair.
-#include "kernel/tolerances.h"
+#include "kernel/core/tolerances.h"
 #include "machine_models/p4/bend_step.h"
 #include "machine_models/p4/machine_model.h"
 #include "machine_models/p4/machine_scene.h"
@@ -60,7 +60,7 @@
 #include "machine_models/p4/step_validator.h"
 #include "occt_adapters/shape_builders.h"
 #include "occt_adapters/shape_impl.h"
-#include "kernel/units.h"
+#include "kernel/core/units.h"
 
 #include <BRepAlgoAPI_Common.hxx>
 #include <BRepBndLib.hxx>

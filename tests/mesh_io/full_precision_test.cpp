@@ -2,7 +2,7 @@
 // ASCII PLY and ASCII STL text, keeps its 0.001 mm overlap or gap (Assimp's single precision
 // snapped it to 2^-8 mm = 0.0039 mm there); binary float32 and float64 values are taken exactly;
 // counts and indices that do not match the data are errors naming where.
-#include "kernel/contact_verdict.h"
+#include "kernel/query/contact_verdict.h"
 #include "mesh_io/mesh_file_reader.h"
 
 #include <gtest/gtest.h>

@@ -1,16 +1,16 @@
 // OCCT adapters on real files and shapes: import with clear errors, meshing with face ids, swept
 // solids with their analytic volumes, and exact distance and common volume.
-#include "kernel/mesh_bvh.h"
-#include "kernel/interference_volume.h"
-#include "kernel/mesh_distance.h"
-#include "kernel/exact_interference_volume.h"
+#include "kernel/bvh/mesh_bvh.h"
+#include "kernel/measure/interference_volume.h"
+#include "kernel/query/mesh_distance.h"
+#include "kernel/measure/exact_interference_volume.h"
 #include "occt_adapters/brep_contact.h"
 #include "occt_adapters/exact_measures.h"
 #include "occt_adapters/shape_builders.h"
 #include "occt_adapters/shape_import.h"
 #include "occt_adapters/shape_mesher.h"
 #include "tests/support/random_meshes.h"
-#include "kernel/units.h"
+#include "kernel/core/units.h"
 
 #include <gtest/gtest.h>
 

@@ -1,9 +1,9 @@
 // The audit service end to end: a small factory put into a scene through the RPCs, audited with
 // rules and tiles, compared with assessing every pair in process; a re-audit after a move equals a
 // fresh audit; the HTML report loads, draws and lists the clashes in headless Chromium.
-#include "kernel/contact_verdict.h"
-#include "kernel/mesh_bvh.h"
-#include "kernel/scene_audit.h"
+#include "kernel/query/contact_verdict.h"
+#include "kernel/bvh/mesh_bvh.h"
+#include "engine/audits/scene_audit.h"
 #include "mesh_io/mesh_file_reader.h"
 #include "tests/server/daemon_fixture.h"
 #include "tests/support/random_meshes.h"

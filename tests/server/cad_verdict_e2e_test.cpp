@@ -4,7 +4,7 @@
 // coordinates. The oracles: closed-form distances of spheres, and for real CAD parts OCCT itself
 // on the whole shapes near the origin (BRepExtrema, then a Boolean common), a different path from
 // the daemon's (which measures face pairs and classifies points in a frame local to the contact).
-#include "kernel/rigid_transform.h"
+#include "kernel/core/rigid_transform.h"
 #include "occt_adapters/shape_builders.h"
 #include "occt_adapters/shape_impl.h"
 #include "occt_adapters/shape_import.h"

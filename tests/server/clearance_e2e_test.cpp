@@ -1,9 +1,9 @@
 // ClearanceQuery end to end, on the real daemon: micrometre gaps and overlaps 50 m from the
 // origin in many orientations, the distance +/- epsilon invariant on real parts, the B-Rep
 // interference volume, and the B-Rep faces of each contact region.
-#include "kernel/interference_volume.h"
-#include "kernel/mesh_collision.h"
-#include "kernel/mesh_bvh.h"
+#include "kernel/measure/interference_volume.h"
+#include "kernel/query/mesh_collision.h"
+#include "kernel/bvh/mesh_bvh.h"
 #include "occt_adapters/exact_measures.h"
 #include "occt_adapters/shape_builders.h"
 #include "occt_adapters/shape_import.h"
@@ -11,7 +11,7 @@
 #include "tests/server/daemon_fixture.h"
 #include "tests/support/sanitized_build.h"
 #include "tests/support/random_meshes.h"
-#include "kernel/units.h"
+#include "kernel/core/units.h"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>

@@ -2,15 +2,15 @@
 // list, deadlines, overload, restarts (SIGTERM and kill -9) that keep acknowledged uploads, and
 // many concurrent clients.
 #include "grpc/health/v1/health.grpc.pb.h"
-#include "kernel/mesh_bvh.h"
-#include "kernel/mesh_distance.h"
+#include "kernel/bvh/mesh_bvh.h"
+#include "kernel/query/mesh_distance.h"
 #include "mesh_io/mesh_file_reader.h"
 #include "occt_adapters/exact_measures.h"
 #include "occt_adapters/shape_builders.h"
 #include "occt_adapters/shape_import.h"
 #include "tests/server/daemon_fixture.h"
 #include "tests/support/random_meshes.h"
-#include "kernel/units.h"
+#include "kernel/core/units.h"
 
 #include <gtest/gtest.h>
 #include <signal.h>

@@ -1,8 +1,8 @@
 // End to end on the real daemon: scenes (put, move, drag stream, delete, persistence), audits as
 // jobs (watch, report against an in-process brute-force answer, cancel), and machine model upload.
-#include "kernel/contact_verdict.h"
-#include "kernel/mesh_bvh.h"
-#include "kernel/mesh_distance.h"
+#include "kernel/query/contact_verdict.h"
+#include "kernel/bvh/mesh_bvh.h"
+#include "kernel/query/mesh_distance.h"
 #include "mesh_io/mesh_file_reader.h"
 #include "tests/server/daemon_fixture.h"
 #include "tests/support/random_meshes.h"

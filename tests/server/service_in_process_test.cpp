@@ -6,7 +6,7 @@
 #include "server/audit_archive.h"
 #include "server/gatekeeper_service.h"
 #include "tests/server/daemon_fixture.h"
-#include "kernel/units.h"
+#include "kernel/core/units.h"
 
 #include <gtest/gtest.h>
 #include <grpcpp/grpcpp.h>

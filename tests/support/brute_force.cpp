@@ -1,7 +1,7 @@
 #include "tests/support/brute_force.h"
 
-#include "kernel/triangle_distance.h"
-#include "kernel/triangle_intersection.h"
+#include "kernel/query/triangle_distance.h"
+#include "kernel/query/triangle_intersection.h"
 
 #include <limits>
 #include <vector>

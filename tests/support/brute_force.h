@@ -2,8 +2,8 @@
 // B's triangles are moved into A's frame with the same relative transform the queries use.
 #pragma once
 
-#include "kernel/rigid_transform.h"
-#include "kernel/triangle_mesh.h"
+#include "kernel/core/rigid_transform.h"
+#include "kernel/mesh/triangle_mesh.h"
 
 #include <set>
 #include <utility>

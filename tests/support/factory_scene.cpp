@@ -1,9 +1,9 @@
 #include "tests/support/factory_scene.h"
 
-#include "kernel/bvh_cache.h"
+#include "engine/parts/bvh_cache.h"
 #include "mesh_io/mesh_file_reader.h"
 #include "tests/support/random_meshes.h"
-#include "kernel/units.h"
+#include "kernel/core/units.h"
 
 #include <cmath>
 #include <map>
@@ -12,6 +12,8 @@
 #include <string>
 
 namespace gk::testing {
+using engine::AuditObject;
+using engine::BvhCache;
 namespace {
 
 constexpr double kBayMm = 10000.0;

@@ -6,7 +6,7 @@
 // between crates whose answers are known.
 #pragma once
 
-#include "kernel/scene_audit.h"
+#include "engine/audits/scene_audit.h"
 
 #include <cstddef>
 #include <string>
@@ -25,7 +25,7 @@ struct FactorySceneOptions {
   // Every robot link and machine gets its own mesh and BVH (a copy) instead of sharing one: the
   // cost of a scene without instancing.
   bool distinct_meshes = false;
-  // When set, BVHs are loaded from (and saved to) this kernel/bvh_cache directory.
+  // When set, BVHs are loaded from (and saved to) this engine/parts/bvh_cache directory.
   std::string bvh_cache_dir;
 };
 
@@ -36,9 +36,9 @@ struct KnownPair {
 };
 
 struct FactoryScene {
-  std::vector<AuditObject> objects;
+  std::vector<engine::AuditObject> objects;
   std::vector<KnownPair> known;
-  std::vector<ContactRule> rules;  // the scene's intended contacts
+  std::vector<engine::ContactRule> rules;  // the scene's intended contacts
   std::size_t unique_meshes = 0;
   std::size_t triangles = 0;
 };

@@ -1,6 +1,6 @@
 #include "tests/support/near_contact_poses.h"
 
-#include "kernel/mesh_distance.h"
+#include "kernel/query/mesh_distance.h"
 #include "tests/support/random_meshes.h"
 
 #include <random>

@@ -2,8 +2,8 @@
 // witness direction so that the gap is uniform in [-1, 3] mm (negative: interpenetrating).
 #pragma once
 
-#include "kernel/mesh_bvh.h"
-#include "kernel/rigid_transform.h"
+#include "kernel/bvh/mesh_bvh.h"
+#include "kernel/core/rigid_transform.h"
 
 #include <vector>
 

@@ -1,8 +1,8 @@
 // Seeded random meshes and poses for tests.
 #pragma once
 
-#include "kernel/rigid_transform.h"
-#include "kernel/triangle_mesh.h"
+#include "kernel/core/rigid_transform.h"
+#include "kernel/mesh/triangle_mesh.h"
 
 #include <array>
 #include <memory>

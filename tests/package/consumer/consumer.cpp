@@ -3,8 +3,8 @@
 // answers what it must.
 #include "clients/gatekeeper_client/upload.h"
 #include "engine/input_checks.h"
-#include "kernel/mesh_bvh.h"
-#include "kernel/mesh_distance.h"
+#include "kernel/bvh/mesh_bvh.h"
+#include "kernel/query/mesh_distance.h"
 
 #include <cmath>
 #include <cstdio>

@@ -1,0 +1,325 @@
+#include "engine/audits/scene_audit.h"
+
+#include "kernel/broadphase/broad_phase.h"
+#include "kernel/measure/contact_regions.h"
+#include "kernel/measure/interference_volume.h"
+#include "kernel/measure/penetration_depth.h"
+#include "kernel/core/tolerances.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <optional>
+#include <tuple>
+#include <thread>
+
+namespace gk::engine {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// Depth on request uses a coarser lattice than ClearanceQuery: an audit has many pairs.
+constexpr int kAuditDepthDirections = 42;
+constexpr double kAuditDepthResolutionMm = 1e-3;
+constexpr int kAuditVolumeRaysPerAxis = 128;
+constexpr std::size_t kMaxTiles = 1u << 20;
+
+bool matches(const std::string& pattern, const std::string& value) { return pattern == "*" || pattern == value; }
+
+// Runs body(i) for i in [0, n) on `threads` threads pulling indices in order.
+template <typename Body>
+void parallel_for(std::size_t n, int threads, Body&& body) {
+  std::atomic<std::size_t> next{0};
+  auto work = [&] {
+    for (std::size_t i = next++; i < n; i = next++) body(i);
+  };
+  std::vector<std::thread> pool;
+  for (std::size_t t = 1; t < std::min<std::size_t>(static_cast<std::size_t>(threads), n); ++t) pool.emplace_back(work);
+  work();
+  for (std::thread& t : pool) t.join();
+}
+
+std::vector<ClashRegion> regions_of(const std::vector<ProximityPair>& pairs, double merge_mm) {
+  std::vector<ClashRegion> out;
+  for (const ContactRegion& r : group_into_regions(pairs, merge_mm))
+    out.push_back({r.point_a, r.bounds, static_cast<unsigned>(r.pairs.size()), r.min_distance_mm});
+  return out;
+}
+
+// The narrow phase of one pair; false when the pair is neither in contact nor too close.
+bool audit_pair(const AuditObject& oa, const AuditObject& ob, const AuditOptions& options, PairClash& out) {
+  VerdictOptions vo;
+  vo.max_contacts = options.max_contacts_per_pair;
+  // Farther than the clearance (plus the window the triangles of CAD parts cannot resolve): not a
+  // clash, no need to measure.
+  const double reach = options.clearance_mm + oa.surface_deviation_mm + ob.surface_deviation_mm;
+  vo.distance_upper_bound_mm = reach;
+  auto v = assess(*oa.mesh, oa.pose, *ob.mesh, ob.pose, vo);
+  if (!v.ok()) {
+    out.verdict = Verdict::kInconclusive;  // a gate treats it as a clash
+    out.inconclusive_reason = InconclusiveReason::kPairFailed;
+    out.error = v.error().to_string();
+    return true;
+  }
+  const VerdictResult& r = v.value();
+  if (r.verdict == Verdict::kClear && r.distance_mm >= reach) return false;
+  out.verdict = r.verdict;
+  out.inconclusive_reason = r.inconclusive_reason;
+  out.distance_mm = r.distance_mm;
+  out.point_a = r.point_a;
+  out.point_b = r.point_b;
+  out.clearance_violation = r.verdict == Verdict::kClear;
+  if (!r.contacts.empty()) {
+    std::vector<ProximityPair> pairs;
+    for (const Contact& c : r.contacts) pairs.push_back({c.triangle_a, c.triangle_b, 0.0, c.point, c.point});
+    out.contacts = static_cast<unsigned>(r.contacts.size());
+    out.contacts_truncated = r.contacts_truncated;
+    out.regions = regions_of(pairs, options.region_merge_mm);
+  } else {
+    auto near = pairs_within(*oa.mesh, oa.pose, *ob.mesh, ob.pose, options.clearance_mm, options.max_contacts_per_pair);
+    if (near.ok()) {
+      out.contacts = static_cast<unsigned>(near.value().pairs.size());
+      out.contacts_truncated = near.value().truncated;
+      out.regions = regions_of(near.value().pairs, options.region_merge_mm);
+    }
+  }
+  if (options.compute_depth && r.verdict == Verdict::kCollision) {
+    auto depth = penetration_vector(*oa.mesh, oa.pose, *ob.mesh, ob.pose, kAuditDepthDirections, kAuditDepthResolutionMm);
+    if (depth.ok()) {
+      out.depth_mm = depth.value().depth_mm;
+      out.depth_direction = depth.value().direction;
+    }
+  }
+  if (options.compute_volume && r.verdict == Verdict::kCollision && oa.mesh->mesh().is_closed_oriented() &&
+      ob.mesh->mesh().is_closed_oriented()) {
+    auto volume = interference_volume(*oa.mesh, oa.pose, *ob.mesh, ob.pose, kAuditVolumeRaysPerAxis);
+    if (volume.ok()) {
+      // A CAD part's triangles are not its surface: the bound covers the band between them.
+      const Aabb ba = transformed_box(oa.mesh->root_bounds(), oa.pose), bb = transformed_box(ob.mesh->root_bounds(), ob.pose);
+      const Aabb region{ba.min.cwiseMax(bb.min), ba.max.cwiseMin(bb.max)};
+      out.volume_mm3 = volume.value().volume_mm3;
+      out.volume_error_bound_mm3 = volume.value().error_bound_mm3 +
+                                   tessellation_band_volume(oa.mesh->mesh(), oa.pose, oa.surface_deviation_mm, region) +
+                                   tessellation_band_volume(ob.mesh->mesh(), ob.pose, ob.surface_deviation_mm, region);
+    }
+  }
+  return true;
+}
+
+std::optional<Error> validate(const std::vector<AuditObject>& objects, const AuditOptions& options) {
+  if (!std::isfinite(options.clearance_mm) || options.clearance_mm < 0.0)
+    return invalid_argument("clearance_mm", "must be a finite, non-negative distance");
+  if (!std::isfinite(options.tile_mm) || options.tile_mm < 0.0) return invalid_argument("tile_mm", "must be finite and >= 0");
+  if (options.threads < 1 || options.threads > 256) return invalid_argument("threads", "must be in [1, 256]");
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const std::string field = "objects[" + std::to_string(i) + "]";
+    if (!objects[i].mesh) return invalid_argument(field + ".mesh", "is missing");
+    if (!objects[i].pose.is_finite() || !objects[i].pose.is_rigid()) return invalid_argument(field + ".pose", "must be a finite rigid transform");
+    if (!(objects[i].surface_deviation_mm >= 0.0 && objects[i].surface_deviation_mm <= 1000.0))
+      return invalid_argument(field + ".surface_deviation_mm", "must be in [0, 1000] mm");
+  }
+  for (std::uint32_t id : options.only_objects)
+    if (id >= objects.size()) return invalid_argument("only_objects", "no object " + std::to_string(id));
+  return std::nullopt;
+}
+
+}  // namespace
+
+int matching_rule(const std::vector<ContactRule>& rules, const AuditObject& a, const AuditObject& b) {
+  for (std::size_t i = 0; i < rules.size(); ++i) {
+    const ContactRule& r = rules[i];
+    const bool cats = (matches(r.category_a, a.category) && matches(r.category_b, b.category)) ||
+                      (matches(r.category_a, b.category) && matches(r.category_b, a.category));
+    if (!cats) continue;
+    if (r.same_group_only && (a.group.empty() || a.group != b.group)) continue;
+    return static_cast<int>(i);
+  }
+  return -1;
+}
+
+Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const AuditOptions& options) {
+  if (auto bad = validate(objects, options)) return *bad;
+  const auto t0 = Clock::now();
+  AuditResult result;
+  result.objects = objects.size();
+  std::vector<Aabb> boxes(objects.size());
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    boxes[i] = transformed_box(objects[i].mesh->root_bounds(), objects[i].pose);
+    result.triangles += objects[i].mesh->mesh().triangle_count();
+  }
+  result.times.boxes_s = seconds_since(t0);
+
+  // ---- broad phase, per tile ----
+  const auto t_broad = Clock::now();
+  std::vector<IndexPair> candidates;
+  std::mutex report_mutex;
+  AuditProgress progress;
+  auto last_report = Clock::now();
+  auto report = [&](bool force) {
+    if (!options.on_progress) return;
+    std::lock_guard<std::mutex> lock(report_mutex);
+    if (!force && seconds_since(last_report) < options.progress_interval_s) return;
+    last_report = Clock::now();
+    progress.elapsed_s = seconds_since(t0);
+    progress.eta_s = progress.pairs_done > 0 && progress.pairs_total > progress.pairs_done
+                         ? progress.elapsed_s / static_cast<double>(progress.pairs_done) *
+                               static_cast<double>(progress.pairs_total - progress.pairs_done)
+                         : 0.0;
+    options.on_progress(progress);
+  };
+  // Boxes closer than the clearance, or than the contact tolerance (assess calls such a pair
+  // TOUCHING), meet; the slack keeps rounding in the box transforms from dropping an exact touch.
+  double magnitude = 1.0, deviation = 0.0;
+  for (const Aabb& b : boxes) magnitude = std::max({magnitude, b.min.cwiseAbs().maxCoeff(), b.max.cwiseAbs().maxCoeff()});
+  for (const AuditObject& o : objects) deviation = std::max(deviation, o.surface_deviation_mm);
+  const double margin = std::max(options.clearance_mm + 2.0 * deviation, tolerances::kContactMm) +
+                        4.0 * tolerances::kBoxSlackRelative * magnitude;
+  bool broad_phase_cancelled = false;
+  std::vector<char> wanted(objects.size(), options.only_objects.empty() ? 1 : 0);
+  for (std::uint32_t id : options.only_objects) wanted[id] = 1;
+  if (!options.only_objects.empty()) {
+    // Re-audit: the changed objects against everything.
+    for (std::uint32_t id : options.only_objects)
+      for (std::uint32_t other : boxes_meeting(boxes, boxes[id], margin))
+        if (other != id && (!wanted[other] || other > id)) candidates.emplace_back(std::min(id, other), std::max(id, other));
+    std::sort(candidates.begin(), candidates.end());
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    result.tiles = 1;
+  } else {
+    Aabb scene;
+    for (const Aabb& b : boxes) scene.extend(b);
+    std::size_t nx = 1, ny = 1;
+    if (options.tile_mm > 0.0 && !scene.empty()) {
+      // Counted in double first: a tiny tile (1e-17 mm) would overflow any integer.
+      const double tx = std::ceil(scene.diagonal().x() / options.tile_mm) + 1.0;
+      const double ty = std::ceil(scene.diagonal().y() / options.tile_mm) + 1.0;
+      if (!(tx * ty <= static_cast<double>(kMaxTiles))) return invalid_argument("tile_mm", "gives more than 2^20 tiles for this scene");
+      nx = static_cast<std::size_t>(tx);
+      ny = static_cast<std::size_t>(ty);
+    }
+    const double tile = options.tile_mm > 0.0 ? options.tile_mm : 1.0;
+    auto tile_x = [&](double x) {
+      if (nx == 1) return std::size_t{0};
+      return std::min(nx - 1, static_cast<std::size_t>(std::max(0.0, std::floor((x - scene.min.x()) / tile))));
+    };
+    auto tile_y = [&](double y) {
+      if (ny == 1) return std::size_t{0};
+      return std::min(ny - 1, static_cast<std::size_t>(std::max(0.0, std::floor((y - scene.min.y()) / tile))));
+    };
+    std::vector<std::vector<std::uint32_t>> members(nx * ny);
+    for (std::uint32_t i = 0; i < objects.size(); ++i) {
+      if (options.cancel && options.cancel->load()) break;  // the broad phase below sees it too
+      const Aabb g = boxes[i].expanded(0.5 * margin);
+      for (std::size_t x = tile_x(g.min.x()); x <= tile_x(g.max.x()); ++x)
+        for (std::size_t y = tile_y(g.min.y()); y <= tile_y(g.max.y()); ++y) members[x * ny + y].push_back(i);
+    }
+    std::size_t entries = 0;
+    for (const auto& m : members) entries += m.size();
+    result.ghost_entries = entries - objects.size();
+    result.tiles = nx * ny;
+    progress.tiles_total = nx * ny;
+    std::vector<std::vector<IndexPair>> per_tile(nx * ny);
+    parallel_for(nx * ny, options.threads, [&](std::size_t t) {
+      // Cancelled between tiles: a million small tiles of a crowded scene take many seconds.
+      if (options.cancel && options.cancel->load()) return;
+      const std::vector<std::uint32_t>& ids = members[t];
+      std::vector<Aabb> local;
+      local.reserve(ids.size());
+      for (std::uint32_t id : ids) local.push_back(boxes[id]);
+      for (const auto& [la, lb] : sweep_and_prune(local, margin)) {
+        const std::uint32_t a = ids[la], b = ids[lb];
+        // The tile holding the low corner of the grown boxes' intersection owns the pair.
+        const Vec3 low = boxes[a].expanded(0.5 * margin).min.cwiseMax(boxes[b].expanded(0.5 * margin).min);
+        if (tile_x(low.x()) * ny + tile_y(low.y()) != t) continue;
+        per_tile[t].emplace_back(std::min(a, b), std::max(a, b));
+      }
+      std::lock_guard<std::mutex> lock(report_mutex);
+      ++progress.tiles_done;
+    });
+    // Cancelled during the broad phase, the candidates are incomplete: never a report of "no clash".
+    broad_phase_cancelled = options.cancel && options.cancel->load();
+    for (auto& v : per_tile) candidates.insert(candidates.end(), v.begin(), v.end());
+    std::sort(candidates.begin(), candidates.end());
+  }
+  // Intended contacts never reach the narrow phase.
+  std::vector<IndexPair> work;
+  for (const IndexPair& p : candidates) {
+    if (matching_rule(options.rules, objects[p.first], objects[p.second]) >= 0) ++result.excluded_by_rules;
+    else work.push_back(p);
+  }
+  result.candidate_pairs = candidates.size();
+  result.times.broad_s = seconds_since(t_broad);
+
+  // ---- narrow phase: the costliest pairs first ----
+  const auto t_narrow = Clock::now();
+  std::vector<std::size_t> order(work.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  auto cost = [&](std::size_t i) {
+    return objects[work[i].first].mesh->mesh().triangle_count() + objects[work[i].second].mesh->mesh().triangle_count();
+  };
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t l, std::size_t r) { return cost(l) > cost(r); });
+  std::vector<PairClash> slots(work.size());
+  std::vector<char> state(work.size(), 0);  // 0 not done, 1 done no clash, 2 clash
+  progress.pairs_total = work.size();
+  report(true);
+  std::atomic<std::size_t> done{0}, clashes{0};
+  parallel_for(order.size(), options.threads, [&](std::size_t k) {
+    if (options.cancel && options.cancel->load()) return;
+    const std::size_t i = order[k];
+    PairClash& c = slots[i];
+    c.a = work[i].first;
+    c.b = work[i].second;
+    const bool clash = audit_pair(objects[c.a], objects[c.b], options, c);
+    state[i] = clash ? 2 : 1;
+    ++done;
+    if (clash) ++clashes;
+    if (clash && options.on_clash) {
+      std::lock_guard<std::mutex> lock(report_mutex);
+      options.on_clash(c);
+    }
+    if (options.on_progress) {
+      {
+        std::lock_guard<std::mutex> lock(report_mutex);
+        progress.pairs_done = done;
+        progress.clashes = clashes;
+      }
+      report(false);
+    }
+  });
+  for (std::size_t i = 0; i < work.size(); ++i)
+    if (state[i] == 2) result.clashes.push_back(std::move(slots[i]));
+  result.pairs_done = done;
+  result.cancelled = broad_phase_cancelled || done < work.size();
+  result.times.narrow_s = seconds_since(t_narrow);
+  result.times.total_s = seconds_since(t0);
+  progress.pairs_done = done;
+  progress.clashes = clashes;
+  report(true);
+  return result;
+}
+
+Result<AuditResult> reaudit_scene(const std::vector<AuditObject>& objects, const AuditResult& previous,
+                                  const std::vector<std::uint32_t>& changed, const AuditOptions& options) {
+  if (changed.empty()) return previous;
+  AuditOptions only = options;
+  only.only_objects = changed;
+  auto fresh = audit_scene(objects, only);
+  if (!fresh.ok()) return fresh.error();
+  for (const PairClash& c : previous.clashes)
+    if (c.a >= objects.size() || c.b >= objects.size())
+      return invalid_argument("previous", "a clash names object " + std::to_string(std::max(c.a, c.b)) + ", beyond the objects given");
+  for (std::uint32_t id : changed)
+    if (id >= objects.size()) return invalid_argument("changed", "no object " + std::to_string(id));
+  std::vector<char> is_changed(objects.size(), 0);
+  for (std::uint32_t id : changed) is_changed[id] = 1;
+  AuditResult out = fresh.value();
+  for (const PairClash& c : previous.clashes)
+    if (!is_changed[c.a] && !is_changed[c.b]) out.clashes.push_back(c);
+  std::sort(out.clashes.begin(), out.clashes.end(),
+            [](const PairClash& l, const PairClash& r) { return std::tie(l.a, l.b) < std::tie(r.a, r.b); });
+  return out;
+}
+
+}  // namespace gk::engine

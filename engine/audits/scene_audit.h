@@ -1,0 +1,120 @@
+// The interference audit of a whole scene (seed 000, scenario 3): every pair of objects checked,
+// tiled and in parallel, with progress and cancellation.
+//
+//  1. Tiles: the scene's floor plan (x, y) is cut into square tiles; an object belongs to every
+//     tile its box meets (a "ghost" in all but one). Each tile runs its own broad phase, and a pair
+//     is kept only by the tile holding the low corner of the two boxes' intersection, so a pair
+//     crossing tile borders is audited once and no global pair set is needed.
+//  2. Two levels of parallelism: tiles are spread over the threads; then the candidate pairs,
+//     sorted by cost (largest first, so no thread is left with a giant pair at the end), are
+//     pulled by the threads one at a time.
+//  3. Per pair: the exact verdict (kernel/query/contact_verdict), contact locations grouped into clash
+//     regions, clearance violations for a gap, and the penetration depth on request.
+// Results are in pair order whatever the tiling or thread count, so runs are reproducible.
+#pragma once
+
+#include "kernel/query/contact_verdict.h"
+#include "kernel/bvh/mesh_bvh.h"
+#include "kernel/core/rigid_transform.h"
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace gk::engine {
+
+// One object: a shared (instanced) mesh at a pose. Identical meshes share one MeshBvh.
+struct AuditObject {
+  std::string name;
+  std::string category;  // e.g. "column", "robot", "pipe"
+  std::string group;     // an assembly; rules can allow contacts inside one
+  std::shared_ptr<const MeshBvh> mesh;
+  RigidTransform pose;
+  // How far the object's true surface may lie from its triangles [mm]: a CAD part's tessellation
+  // deflection, 0 for a mesh. A pair is reported up to the clearance plus both deviations, for the
+  // layer above to decide on the exact geometry (the triangles cannot tell within that window).
+  double surface_deviation_mm = 0.0;
+};
+
+// An intended contact (seed 004 §6: parts bolted together, pins in holes): matching pairs are left
+// out of the narrow phase and counted as excluded.
+struct ContactRule {
+  std::string name;
+  std::string category_a, category_b;  // "*" matches any; the order of the pair does not matter
+  bool same_group_only = false;        // only when both objects belong to the same (non-empty) group
+};
+
+struct ClashRegion {
+  Vec3 point = Vec3::Zero();  // a representative contact point (world)
+  Aabb bounds;                // of the region's contact points
+  unsigned contacts = 0;      // triangle pairs in it
+  double min_distance_mm = 0.0;
+};
+
+struct PairClash {
+  std::uint32_t a = 0, b = 0;  // object indices, a < b
+  Verdict verdict = Verdict::kClear;
+  InconclusiveReason inconclusive_reason = InconclusiveReason::kNone;
+  double distance_mm = 0.0;    // 0 when in contact
+  bool clearance_violation = false;  // apart, but closer than the gap
+  Vec3 point_a = Vec3::Zero(), point_b = Vec3::Zero();
+  std::vector<ClashRegion> regions;
+  unsigned contacts = 0;
+  bool contacts_truncated = false;
+  double depth_mm = -1.0;      // on request, for collisions: certified upper bound (kernel/measure/penetration_depth)
+  Vec3 depth_direction = Vec3::Zero();
+  double volume_mm3 = -1.0;    // on request, for collisions of closed meshes: ray-cast shared volume
+  double volume_error_bound_mm3 = -1.0;  // |volume_mm3 - true volume| <= this
+  std::string error;           // the pair could not be decided (then verdict INCONCLUSIVE)
+};
+
+struct AuditProgress {
+  std::size_t tiles_total = 0, tiles_done = 0;
+  std::size_t pairs_total = 0, pairs_done = 0;
+  std::size_t clashes = 0;
+  double elapsed_s = 0.0, eta_s = 0.0;
+};
+
+struct AuditOptions {
+  double clearance_mm = 0.0;   // pairs closer than this are violations
+  double tile_mm = 0.0;        // 0: one tile
+  int threads = 1;
+  bool compute_depth = false;
+  bool compute_volume = false;
+  double region_merge_mm = 100.0;
+  std::size_t max_contacts_per_pair = 2000;
+  std::vector<ContactRule> rules;
+  // Only pairs with at least one of these objects (an incremental re-audit); empty: all pairs.
+  std::vector<std::uint32_t> only_objects;
+  const std::atomic<bool>* cancel = nullptr;
+  std::function<void(const AuditProgress&)> on_progress;  // called from worker threads, serialised
+  std::function<void(const PairClash&)> on_clash;          // each clash as found (any order), serialised
+  double progress_interval_s = 0.2;
+};
+
+struct AuditTimes {
+  double boxes_s = 0.0, broad_s = 0.0, narrow_s = 0.0, total_s = 0.0;
+};
+
+struct AuditResult {
+  std::vector<PairClash> clashes;        // ordered by (a, b)
+  std::size_t objects = 0, triangles = 0;  // triangles counted per instance
+  std::size_t tiles = 0, candidate_pairs = 0, excluded_by_rules = 0, pairs_done = 0;
+  std::size_t ghost_entries = 0;         // object-in-tile entries beyond the first
+  bool cancelled = false;                // then clashes cover the pairs_done pairs finished
+  AuditTimes times;
+};
+
+Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const AuditOptions& options);
+
+// Incremental re-audit: the previous result with every pair involving a changed object recomputed
+// (the changed objects' new poses are in `objects`). Equals a full audit of `objects`.
+Result<AuditResult> reaudit_scene(const std::vector<AuditObject>& objects, const AuditResult& previous,
+                                  const std::vector<std::uint32_t>& changed, const AuditOptions& options);
+
+// Which rule (index) excludes the pair, or -1.
+int matching_rule(const std::vector<ContactRule>& rules, const AuditObject& a, const AuditObject& b);
+
+}  // namespace gk::engine

@@ -1,0 +1,59 @@
+// A rigid motion x -> R x + t in double precision (R orthonormal, det +1).
+#pragma once
+
+#include "kernel/core/aabb.h"
+#include "kernel/core/geometry_types.h"
+#include "kernel/core/tolerances.h"
+
+#include <cmath>
+
+namespace gk {
+
+struct RigidTransform {
+  Mat3 rotation = Mat3::Identity();
+  Vec3 translation = Vec3::Zero();
+
+  static RigidTransform identity() { return {}; }
+  static RigidTransform from_translation(const Vec3& t) { return {Mat3::Identity(), t}; }
+  static RigidTransform from_axis_angle(const Vec3& axis, double angle_rad, const Vec3& t = Vec3::Zero()) {
+    return {Eigen::AngleAxisd(angle_rad, axis.normalized()).toRotationMatrix(), t};
+  }
+
+  Vec3 apply(const Vec3& p) const { return rotation * p + translation; }
+  Vec3 apply_direction(const Vec3& d) const { return rotation * d; }
+
+  RigidTransform inverse() const {
+    const Mat3 rt = rotation.transpose();
+    return {rt, -(rt * translation)};
+  }
+
+  // (this * other)(x) = this(other(x)).
+  RigidTransform operator*(const RigidTransform& other) const {
+    return {rotation * other.rotation, rotation * other.translation + translation};
+  }
+
+  bool is_finite() const { return rotation.allFinite() && translation.allFinite(); }
+
+  bool is_rigid() const {
+    if (!is_finite()) return false;
+    const double off = (rotation.transpose() * rotation - Mat3::Identity()).cwiseAbs().maxCoeff();
+    return off <= tolerances::kRotationOrthonormality && rotation.determinant() > 0.0;
+  }
+};
+
+// The pose of mesh B expressed in mesh A's frame: queries run in A's frame and touch B's vertices
+// only where a leaf pair needs them, never all of them.
+inline RigidTransform relative_transform(const RigidTransform& pose_a, const RigidTransform& pose_b) {
+  return pose_a.inverse() * pose_b;
+}
+
+// The axis-aligned box around a box moved by a pose (its eight corners moved).
+inline Aabb transformed_box(const Aabb& local, const RigidTransform& pose) {
+  Aabb out;
+  for (int k = 0; k < 8; ++k)
+    out.extend(pose.apply(Vec3((k & 1) ? local.max.x() : local.min.x(), (k & 2) ? local.max.y() : local.min.y(),
+                               (k & 4) ? local.max.z() : local.min.z())));
+  return out;
+}
+
+}  // namespace gk

@@ -1,0 +1,128 @@
+// Two posed meshes seen from mesh A's frame: the relative transform of B, and the node tests every
+// dual-tree traversal shares. B's vertices are transformed only where a leaf pair needs them.
+#pragma once
+
+#include "kernel/bvh/mesh_bvh.h"
+#include "kernel/mesh/oriented_box.h"
+#include "kernel/core/rigid_transform.h"
+#include "kernel/core/status.h"
+#include "kernel/core/tolerances.h"
+#include "kernel/query/triangle_distance.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace gk {
+
+// Work done by a query (seed 004 counts these as the measure of work).
+struct QueryStats {
+  long long node_pairs_tested = 0;
+  long long triangle_pairs_tested = 0;
+};
+
+class MeshPairFrame {
+ public:
+  // Fails when a pose is not a finite rigid motion.
+  static Result<MeshPairFrame> make(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
+                                    const RigidTransform& pose_b) {
+    if (!pose_a.is_rigid()) return invalid_argument("pose_a", "not a finite rigid transform (orthonormal rotation, det +1)");
+    if (!pose_b.is_rigid()) return invalid_argument("pose_b", "not a finite rigid transform (orthonormal rotation, det +1)");
+    return MeshPairFrame(a, pose_a, b, pose_b);
+  }
+
+  const MeshBvh& a() const { return *a_; }
+  const MeshBvh& b() const { return *b_; }
+  const RigidTransform& pose_a() const { return pose_a_; }
+  const RigidTransform& b_in_a() const { return b_in_a_; }
+
+  bool is_leaf_a(int n) const { return na_.info[n].x() != 0; }
+  bool is_leaf_b(int n) const { return nb_.info[n].x() != 0; }
+  int first_child_a(int n) const { return na_.info[n].y(); }
+  int second_child_a(int n) const { return na_.info[n].z(); }
+  int first_child_b(int n) const { return nb_.info[n].y(); }
+  int second_child_b(int n) const { return nb_.info[n].z(); }
+  // Leaf primitive range [begin, end] inclusive, in tree order.
+  int begin_a(int n) const { return na_.info[n].y(); }
+  int end_a(int n) const { return na_.info[n].z(); }
+  int begin_b(int n) const { return nb_.info[n].y(); }
+  int end_b(int n) const { return nb_.info[n].z(); }
+
+  // Size measure used to decide which node of a pair to split: the larger one.
+  double size_a(int n) const { return diagonal_sq(*a_, n); }
+  double size_b(int n) const { return diagonal_sq(*b_, n); }
+
+  // Separating-axis test of node boxes, conservative by the rounding slack.
+  bool nodes_overlap(int node_a, int node_b, double margin = 0.0) const {
+    return boxes_overlap(a_->node_center(node_a), a_->node_half_extent(node_a), b_in_a_.apply(b_->node_center(node_b)),
+                         b_in_a_.rotation, abs_r_, b_->node_half_extent(node_b), slack_ + margin);
+  }
+
+  // A lower bound of the distance between anything in node_a and anything in node_b: the larger of
+  // the box-to-box gaps measured along A's axes and along B's axes.
+  double nodes_lower_bound(int node_a, int node_b) const {
+    const Vec3& ea = a_->node_half_extent(node_a);
+    const Vec3& eb = b_->node_half_extent(node_b);
+    const Vec3 d = b_in_a_.apply(b_->node_center(node_b)) - a_->node_center(node_a);
+    const Vec3 gap_a = (d.cwiseAbs() - ea - abs_r_ * eb).cwiseMax(0.0);
+    const Vec3 gap_b = ((b_in_a_.rotation.transpose() * d).cwiseAbs() - abs_r_.transpose() * ea - eb).cwiseMax(0.0);
+    return std::max(std::max(gap_a.norm(), gap_b.norm()) - slack_, 0.0);
+  }
+
+  // The box bound, tightened when exactly one side is a leaf: the leaf's triangles against the
+  // other node's bounding sphere. This keeps a small, dense mesh from being opened in full under
+  // every large triangle whose box comes near it.
+  double pair_lower_bound(int node_a, int node_b) const {
+    const double box = nodes_lower_bound(node_a, node_b);
+    const bool leaf_a = is_leaf_a(node_a), leaf_b = is_leaf_b(node_b);
+    if (leaf_a == leaf_b) return box;
+    double nearest = std::numeric_limits<double>::infinity();
+    double radius;
+    if (leaf_a) {
+      const Vec3 c = b_in_a_.apply(b_->node_center(node_b));
+      radius = b_->node_half_extent(node_b).norm();
+      for (int k = begin_a(node_a); k <= end_a(node_a); ++k)
+        nearest = std::min(nearest, (closest_point_on_triangle(c, a_->ordered_triangle(k)) - c).norm());
+    } else {
+      const Vec3 c = a_in_b_.apply(a_->node_center(node_a));
+      radius = a_->node_half_extent(node_a).norm();
+      for (int k = begin_b(node_b); k <= end_b(node_b); ++k)
+        nearest = std::min(nearest, (closest_point_on_triangle(c, b_->ordered_triangle(k)) - c).norm());
+    }
+    return std::max(box, nearest - radius - slack_);
+  }
+
+  Triangle b_triangle_in_a(int ordered_b) const {
+    const Triangle& t = b_->ordered_triangle(ordered_b);
+    return {b_in_a_.apply(t[0]), b_in_a_.apply(t[1]), b_in_a_.apply(t[2])};
+  }
+
+  Vec3 to_world(const Vec3& p_in_a) const { return pose_a_.apply(p_in_a); }
+
+ private:
+  MeshPairFrame(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b, const RigidTransform& pose_b)
+      : a_(&a), b_(&b), na_(a.nodes()), nb_(b.nodes()), pose_a_(pose_a), b_in_a_(relative_transform(pose_a, pose_b)) {
+    abs_r_ = abs_with_epsilon(b_in_a_.rotation);
+    a_in_b_ = b_in_a_.inverse();
+    // Rounding in a box test is relative to the magnitude of the coordinates involved.
+    const Aabb ra = a.root_bounds(), rb = b.root_bounds();
+    const double scale = std::max({ra.min.cwiseAbs().maxCoeff(), ra.max.cwiseAbs().maxCoeff(),
+                                   b_in_a_.translation.cwiseAbs().maxCoeff() + rb.min.cwiseAbs().maxCoeff() +
+                                       rb.max.cwiseAbs().maxCoeff(), 1.0});
+    slack_ = tolerances::kBoxSlackRelative * scale;
+  }
+
+  static double diagonal_sq(const MeshBvh& m, int n) { return m.node_half_extent(n).squaredNorm(); }
+
+  const MeshBvh* a_;
+  const MeshBvh* b_;
+  MeshBvh::NodeView na_, nb_;
+  RigidTransform pose_a_;
+  RigidTransform b_in_a_;
+  RigidTransform a_in_b_;
+  Mat3 abs_r_;
+  double slack_ = 0.0;
+};
+
+}  // namespace gk

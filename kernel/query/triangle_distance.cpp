@@ -1,0 +1,181 @@
+#include "kernel/query/triangle_distance.h"
+
+#include "kernel/query/triangle_intersection.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace gk {
+
+Vec3 closest_point_on_triangle(const Vec3& x, const Triangle& t) {
+  const Vec3 &a = t[0], &b = t[1], &c = t[2];
+  const Vec3 ab = b - a, ac = c - a, ax = x - a;
+  const double d1 = ab.dot(ax), d2 = ac.dot(ax);
+  if (d1 <= 0.0 && d2 <= 0.0) return a;
+  const Vec3 bx = x - b;
+  const double d3 = ab.dot(bx), d4 = ac.dot(bx);
+  if (d3 >= 0.0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+    const double v = d1 / (d1 - d3);
+    return a + v * ab;
+  }
+  const Vec3 cx = x - c;
+  const double d5 = ab.dot(cx), d6 = ac.dot(cx);
+  if (d6 >= 0.0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+    const double w = d2 / (d2 - d6);
+    return a + w * ac;
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return b + w * (c - b);
+  }
+  const double sum = va + vb + vc;
+  if (!(sum > 0.0)) {
+    // Degenerate (zero-area) triangle: the closest point lies on one of its edges.
+    Vec3 best = a, on_edge, unused;
+    double best_d = (x - a).squaredNorm();
+    const Vec3* corners[3] = {&a, &b, &c};
+    for (int e = 0; e < 3; ++e) {
+      closest_points_on_segments(*corners[e], *corners[(e + 1) % 3], x, x, on_edge, unused);
+      const double d = (x - on_edge).squaredNorm();
+      if (d < best_d) {
+        best_d = d;
+        best = on_edge;
+      }
+    }
+    return best;
+  }
+  const double v = vb / sum, w = vc / sum;
+  return a + ab * v + ac * w;
+}
+
+namespace {
+
+Vec3 closest_point_on_segment(const Vec3& a, const Vec3& b, const Vec3& x) {
+  const Vec3 ab = b - a;
+  const double len2 = ab.squaredNorm();
+  if (!(len2 > 0.0)) return a;
+  return a + std::clamp((x - a).dot(ab) / len2, 0.0, 1.0) * ab;
+}
+
+}  // namespace
+
+void closest_points_on_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1, Vec3& on_p,
+                                Vec3& on_q) {
+  // The minimum is either between the two interiors (the lines' common perpendicular, when it
+  // falls inside both segments) or has an endpoint on one side. The interior parameters come from
+  // cross products (Goldman), which stay accurate for nearly parallel segments where the textbook
+  // a*e - b*b denominator cancels.
+  double best = std::numeric_limits<double>::infinity();
+  auto consider = [&](const Vec3& a, const Vec3& b) {
+    const double d = (a - b).squaredNorm();
+    if (d < best) {
+      best = d;
+      on_p = a;
+      on_q = b;
+    }
+  };
+  const Vec3 d1 = p1 - p0, d2 = q1 - q0, r = q0 - p0;
+  const Vec3 n = d1.cross(d2);
+  const double nn = n.squaredNorm();
+  if (nn > 0.0) {
+    const double s = r.cross(d2).dot(n) / nn;
+    const double t = r.cross(d1).dot(n) / nn;
+    if (s >= 0.0 && s <= 1.0 && t >= 0.0 && t <= 1.0) consider(p0 + s * d1, q0 + t * d2);
+  }
+  consider(p0, closest_point_on_segment(q0, q1, p0));
+  consider(p1, closest_point_on_segment(q0, q1, p1));
+  consider(closest_point_on_segment(p0, p1, q0), q0);
+  consider(closest_point_on_segment(p0, p1, q1), q1);
+}
+
+namespace {
+
+// Distance from the plane of t to the nearest corner of other, when all of other's corners lie
+// strictly on one side; 0 when they straddle or touch the plane.
+double plane_separation(const Triangle& t, const Triangle& other) {
+  const Vec3 n = (t[1] - t[0]).cross(t[2] - t[0]);
+  const double len = n.norm();
+  if (!(len > 0.0)) return 0.0;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const Vec3& v : other) {
+    const double s = n.dot(v - t[0]);
+    lo = std::min(lo, s);
+    hi = std::max(hi, s);
+  }
+  if (lo > 0.0) return lo / len;
+  if (hi < 0.0) return -hi / len;
+  return 0.0;
+}
+
+double box_gap(const Triangle& p, const Triangle& q) {
+  const Vec3 pmin = p[0].cwiseMin(p[1]).cwiseMin(p[2]), pmax = p[0].cwiseMax(p[1]).cwiseMax(p[2]);
+  const Vec3 qmin = q[0].cwiseMin(q[1]).cwiseMin(q[2]), qmax = q[0].cwiseMax(q[1]).cwiseMax(q[2]);
+  return (qmin - pmax).cwiseMax(pmin - qmax).cwiseMax(Vec3::Zero()).norm();
+}
+
+}  // namespace
+
+double triangle_distance_lower_bound(const Triangle& p, const Triangle& q) {
+  return std::max({box_gap(p, q), plane_separation(p, q), plane_separation(q, p)});
+}
+
+TriangleDistance triangle_distance(const Triangle& p, const Triangle& q, double stop_at) {
+  TriangleDistance best;
+  const double bound = triangle_distance_lower_bound(p, q);
+  if (bound >= stop_at) {
+    best.distance = bound;
+    best.bounded_only = true;
+    return best;
+  }
+  // The exact intersection test is needed only when the floating bound cannot rule contact out
+  // with a margin far above its rounding (1e-9 relative to the coordinates).
+  const double magnitude = std::max({p[0].cwiseAbs().maxCoeff(), q[0].cwiseAbs().maxCoeff(), 1.0});
+  if (!(bound > 1e-9 * magnitude)) {
+    const TriangleIntersection hit = intersect_triangles(p, q);
+    if (hit.intersects) {
+      best.distance = 0.0;
+      best.on_p = best.on_q = 0.5 * (hit.segment_start + hit.segment_end);
+      return best;
+    }
+  }
+  double best_sq = std::numeric_limits<double>::infinity();
+  auto consider = [&](const Vec3& a, const Vec3& b) {
+    const double d = (a - b).squaredNorm();
+    if (d < best_sq) {
+      best_sq = d;
+      best.on_p = a;
+      best.on_q = b;
+    }
+  };
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      Vec3 a, b;
+      closest_points_on_segments(p[i], p[(i + 1) % 3], q[j], q[(j + 1) % 3], a, b);
+      consider(a, b);
+      // Early exit (as in PQP's TriDist): when the plane through a normal to b - a has all of p on
+      // a's side and all of q on b's side, no pair of points can be closer than this one.
+      const Vec3 v = b - a;
+      if (v.squaredNorm() > 0.0 && (p[0] - a).dot(v) <= 0.0 && (p[1] - a).dot(v) <= 0.0 && (p[2] - a).dot(v) <= 0.0 &&
+          (q[0] - b).dot(v) >= 0.0 && (q[1] - b).dot(v) >= 0.0 && (q[2] - b).dot(v) >= 0.0) {
+        best.on_p = a;
+        best.on_q = b;
+        best.distance = v.norm();
+        return best;
+      }
+    }
+  }
+  for (int i = 0; i < 3; ++i) {
+    consider(p[i], closest_point_on_triangle(p[i], q));
+    consider(closest_point_on_triangle(q[i], p), q[i]);
+  }
+  best.distance = std::sqrt(best_sq);
+  return best;
+}
+
+}  // namespace gk

@@ -1,0 +1,167 @@
+// CLEAR / TOUCHING / COLLISION / INCONCLUSIVE on closed and open meshes, and the invariant that
+// moving one mesh along the witness direction by the distance minus or plus a little flips it.
+#include "kernel/query/contact_verdict.h"
+#include "kernel/bvh/mesh_bvh.h"
+#include "kernel/query/point_containment.h"
+#include "tests/support/random_meshes.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace gk {
+namespace {
+
+using testing::Rng;
+
+std::shared_ptr<MeshBvh> box(const Vec3& lo, const Vec3& hi) {
+  return MeshBvh::build(testing::share(testing::box_mesh(lo, hi))).value();
+}
+
+Verdict verdict_of(const MeshBvh& a, const MeshBvh& b, const RigidTransform& pose_b = {}) {
+  return assess(a, {}, b, pose_b).value().verdict;
+}
+
+TEST(ContactVerdict, BoxesStackedFaceToFaceTouch) {
+  const auto a = box(Vec3(0, 0, 0), Vec3(10, 10, 10));
+  const auto b = box(Vec3(2, 3, 10), Vec3(6, 7, 14));
+  EXPECT_EQ(verdict_of(*a, *b), Verdict::kTouching);
+  EXPECT_EQ(verdict_of(*b, *a), Verdict::kTouching);
+}
+
+// Equal boxes side by side: their faces meet flush and their side faces lie in common planes,
+// meeting there only along an edge. Interiors apart: TOUCHING (it was a false COLLISION while
+// coplanar faces with equal normals counted as overlapping whatever they shared). Pushed in by the
+// least representable step, or by a micrometre, they collide.
+TEST(ContactVerdict, EqualBoxesSideBySideWithFlushSideFacesTouch) {
+  const auto a = box(Vec3(0, 0, 0), Vec3(100, 100, 100));
+  for (const Vec3& offset : {Vec3(100, 0, 0), Vec3(100, 10, 0), Vec3(0, 0, 100), Vec3(100, 100, 0), Vec3(-100, 0, 0)}) {
+    const auto b = box(Vec3(0, 0, 0), Vec3(100, 100, 100));
+    EXPECT_EQ(verdict_of(*a, *b, RigidTransform::from_translation(offset)), Verdict::kTouching) << offset.transpose();
+    EXPECT_EQ(verdict_of(*b, *a, RigidTransform::from_translation(-offset)), Verdict::kTouching) << offset.transpose();
+  }
+  const auto b = box(Vec3(0, 0, 0), Vec3(100, 100, 100));
+  EXPECT_EQ(verdict_of(*a, *b, RigidTransform::from_translation(Vec3(std::nextafter(100.0, 0.0), 0, 0))), Verdict::kCollision);
+  EXPECT_EQ(verdict_of(*a, *b, RigidTransform::from_translation(Vec3(99.999, 10, 0))), Verdict::kCollision);
+  // Two equal boxes in the same place share every face with equal normals: a collision.
+  EXPECT_EQ(verdict_of(*a, *b), Verdict::kCollision);
+  // A smaller box on A with two side faces flush with A's (equal normals, meeting along an edge):
+  // touching; sunk halfway in, its top face flush with A's: a collision.
+  const auto small = box(Vec3(0, 0, 0), Vec3(50, 50, 50));
+  EXPECT_EQ(verdict_of(*a, *small, RigidTransform::from_translation(Vec3(0, 0, 100))), Verdict::kTouching);
+  EXPECT_EQ(verdict_of(*a, *small, RigidTransform::from_translation(Vec3(0, 0, 50))), Verdict::kCollision);
+}
+
+TEST(ContactVerdict, OverlapGapAndContactTolerance) {
+  const auto a = box(Vec3(0, 0, 0), Vec3(10, 10, 10));
+  const auto b = box(Vec3(2, 3, 0), Vec3(6, 7, 4));
+  EXPECT_EQ(verdict_of(*a, *b, RigidTransform::from_translation(Vec3(0, 0, 10 - 0.003))), Verdict::kCollision);
+  EXPECT_EQ(verdict_of(*a, *b, RigidTransform::from_translation(Vec3(0, 0, 10 + 0.003))), Verdict::kClear);
+  const double inside_tolerance = 0.5 * tolerances::kContactMm;
+  EXPECT_EQ(verdict_of(*a, *b, RigidTransform::from_translation(Vec3(0, 0, 10 + inside_tolerance))), Verdict::kTouching);
+}
+
+TEST(ContactVerdict, ContainedBoxIsACollisionWithoutAnySurfaceContact) {
+  const auto outer = box(Vec3(0, 0, 0), Vec3(10, 10, 10));
+  const auto inner = box(Vec3(4, 4, 4), Vec3(5, 5, 5));
+  const auto v = assess(*outer, {}, *inner, {}).value();
+  EXPECT_EQ(v.verdict, Verdict::kCollision);
+  EXPECT_TRUE(v.contacts.empty());
+  EXPECT_EQ(verdict_of(*inner, *outer), Verdict::kCollision);
+}
+
+TEST(ContactVerdict, FlushInsideIsACollisionNotATouch) {
+  // Shares the top face plane with equal normals: overlapping volume, coplanar faces.
+  const auto outer = box(Vec3(0, 0, 0), Vec3(10, 10, 10));
+  const auto inner = box(Vec3(2, 2, 6), Vec3(5, 5, 10));
+  EXPECT_EQ(verdict_of(*outer, *inner), Verdict::kCollision);
+}
+
+TEST(ContactVerdict, EdgeRestingOnAFaceTouches) {
+  const auto a = box(Vec3(-10, -10, -10), Vec3(10, 10, 0));
+  const auto b = box(Vec3(-2, -2, -2), Vec3(2, 2, 2));
+  // B turned 45 degrees about x so an edge points down; lifted so that edge lies on z = 0. The
+  // rotation rounds the edge's height by ~1e-16 mm, far inside the contact tolerance.
+  RigidTransform pose = RigidTransform::from_axis_angle(Vec3::UnitX(), 0.25 * 3.14159265358979323846);
+  pose.translation = Vec3(0, 0, 2.0 * std::sqrt(2.0));
+  EXPECT_EQ(verdict_of(*a, *b, pose), Verdict::kTouching);
+  pose.translation.z() -= 0.01;
+  EXPECT_EQ(verdict_of(*a, *b, pose), Verdict::kCollision);
+}
+
+TEST(ContactVerdict, OpenMeshesThatIntersectCollide) {
+  Rng rng(4);
+  const auto a = MeshBvh::build(testing::share(testing::random_soup(rng, 200, 5.0, 2.0))).value();
+  const auto b = MeshBvh::build(testing::share(testing::random_soup(rng, 200, 5.0, 2.0))).value();
+  const auto v = assess(*a, {}, *b, {}).value();
+  ASSERT_FALSE(v.contacts.empty());
+  EXPECT_EQ(v.verdict, Verdict::kCollision);
+}
+
+TEST(ContactVerdict, MovingByTheDistanceAlongTheWitnessFlipsTheVerdict) {
+  Rng rng(77);
+  int checked = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const auto a = MeshBvh::build(testing::share(testing::random_closed_blob(rng, 2, 10.0, 0.15, Vec3::Zero()))).value();
+    const auto b = MeshBvh::build(testing::share(testing::random_closed_blob(rng, 2, 8.0, 0.15, Vec3::Zero()))).value();
+    const RigidTransform pose_a = testing::random_pose(rng, 1000.0);
+    RigidTransform pose_b = testing::random_pose(rng, 1.0);
+    const Vec3 dir = Vec3::Random().normalized();
+    pose_b.translation = pose_a.translation + dir * 30.0;
+    const auto start = assess(*a, pose_a, *b, pose_b).value();
+    ASSERT_EQ(start.verdict, Verdict::kClear);
+    const double d = start.distance_mm;
+    const Vec3 u = (start.point_b - start.point_a) / d;
+    const double eps = 0.01;  // [mm], 100x the contact tolerance
+    RigidTransform nearer = pose_b, past = pose_b;
+    nearer.translation -= (d - eps) * u;
+    past.translation -= (d + eps) * u;
+    const auto near_v = assess(*a, pose_a, *b, nearer).value();
+    EXPECT_EQ(near_v.verdict, Verdict::kClear) << "trial " << trial;
+    // After the move the old witnesses are eps apart, so the minimum is at most eps (1e-9 rounding).
+    EXPECT_LE(near_v.distance_mm, eps + 1e-9);
+    EXPECT_EQ(assess(*a, pose_a, *b, past).value().verdict, Verdict::kCollision) << "trial " << trial;
+    ++checked;
+  }
+  EXPECT_EQ(checked, 60);
+}
+
+TEST(PointContainment, RayParityAgreesWithTheWindingNumber) {
+  // Oracle: the winding number (O(n), no ray). Random points around rough blobs, and lattice
+  // points on a box's faces, edges and corners, where rays graze edges and must be retried.
+  testing::Rng rng(3);
+  std::uniform_real_distribution<double> coord(-60.0, 60.0);
+  for (int blob = 0; blob < 3; ++blob) {
+    const auto mesh = MeshBvh::build(testing::share(testing::random_closed_blob(rng, 4, 50.0, 0.4, Vec3(1, 2, 3)))).value();
+    for (int i = 0; i < 2000; ++i) {
+      const Vec3 p(coord(rng), coord(rng), coord(rng));
+      const auto parity = point_inside(*mesh, p);
+      ASSERT_TRUE(parity.has_value());
+      EXPECT_EQ(*parity, std::fabs(winding_number(mesh->mesh(), p)) > 0.5) << p.transpose();
+    }
+  }
+  const auto box = MeshBvh::build(testing::share(testing::box_mesh(Vec3(0, 0, 0), Vec3(4, 4, 4)))).value();
+  for (int x = -1; x <= 5; ++x)
+    for (int y = -1; y <= 5; ++y)
+      for (int z = -1; z <= 5; ++z) {
+        const Vec3 p(x, y, z);
+        const auto parity = point_inside(*box, p);
+        const bool on_surface = (p.minCoeff() >= 0 && p.maxCoeff() <= 4) && (p.minCoeff() == 0 || p.maxCoeff() == 4);
+        if (on_surface) {
+          EXPECT_FALSE(parity.has_value()) << p.transpose();  // on the surface: the caller decides
+        } else {
+          ASSERT_TRUE(parity.has_value()) << p.transpose();
+          EXPECT_EQ(*parity, p.minCoeff() > 0 && p.maxCoeff() < 4) << p.transpose();
+        }
+      }
+}
+
+TEST(ContactVerdict, ToStringNamesEveryVerdict) {
+  EXPECT_STREQ(to_string(Verdict::kClear), "CLEAR");
+  EXPECT_STREQ(to_string(Verdict::kTouching), "TOUCHING");
+  EXPECT_STREQ(to_string(Verdict::kCollision), "COLLISION");
+  EXPECT_STREQ(to_string(Verdict::kInconclusive), "INCONCLUSIVE");
+}
+
+}  // namespace
+}  // namespace gk

@@ -1,0 +1,123 @@
+// Containment of every body, and touching decided without a cap (geometry-truth issue, items 3
+// and 4): a mesh of two bodies whose second lies inside a closed solid, an open mesh inside a
+// closed crate, the containment reported where it is; a finely meshed box resting on a plate
+// (thousands of coplanar contact pairs) is TOUCHING, and one crossing pair among them a COLLISION.
+#include "kernel/query/contact_verdict.h"
+#include "tests/support/random_meshes.h"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <map>
+
+namespace gk {
+namespace {
+
+using testing::box_mesh;
+
+// Two meshes joined into one (the second's indices shifted): a multi-body mesh.
+TriangleMesh joined(const TriangleMesh& a, const TriangleMesh& b) {
+  std::vector<Vec3> v = a.vertices();
+  std::vector<TriangleMesh::Face> f = a.faces();
+  const auto base = static_cast<std::uint32_t>(v.size());
+  v.insert(v.end(), b.vertices().begin(), b.vertices().end());
+  for (TriangleMesh::Face face : b.faces()) f.push_back({face[0] + base, face[1] + base, face[2] + base});
+  return TriangleMesh::create(std::move(v), std::move(f)).value();
+}
+
+std::shared_ptr<MeshBvh> bvh(TriangleMesh mesh) { return MeshBvh::build(testing::share(std::move(mesh))).value(); }
+
+// A box whose faces are an n x n grid of squares (2 n^2 triangles each), closed and outward.
+TriangleMesh fine_box(const Vec3& lo, const Vec3& hi, int n) {
+  std::vector<Vec3> v;
+  std::vector<TriangleMesh::Face> f;
+  // Each face as its own grid; shared edges get identical coordinates, merged below.
+  auto face = [&](const Vec3& origin, const Vec3& du, const Vec3& dv) {
+    const auto base = static_cast<std::uint32_t>(v.size());
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) v.push_back(origin + du * (static_cast<double>(i) / n) + dv * (static_cast<double>(j) / n));
+    auto at = [&](int i, int j) { return base + static_cast<std::uint32_t>(j * (n + 1) + i); };
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        f.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+        f.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+      }
+  };
+  const Vec3 d = hi - lo;
+  const Vec3 ex(d.x(), 0, 0), ey(0, d.y(), 0), ez(0, 0, d.z());
+  face(lo, ey, ex);            // z = lo, outward -z
+  face(lo + ez, ex, ey);       // z = hi
+  face(lo, ex, ez);            // y = lo
+  face(lo + ey, ez, ex);       // y = hi
+  face(lo, ez, ey);            // x = lo
+  face(lo + ex, ey, ez);       // x = hi
+  // Merge equal corners so the box is closed.
+  std::vector<Vec3> merged;
+  std::vector<std::uint32_t> remap(v.size());
+  std::map<std::array<double, 3>, std::uint32_t> index;
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    const auto [it, added] = index.emplace(std::array<double, 3>{v[i].x(), v[i].y(), v[i].z()},
+                                           static_cast<std::uint32_t>(merged.size()));
+    if (added) merged.push_back(v[i]);
+    remap[i] = it->second;
+  }
+  for (auto& face_ : f)
+    for (auto& corner : face_) corner = remap[corner];
+  return TriangleMesh::create(std::move(merged), std::move(f)).value();
+}
+
+TEST(Containment, TheSecondBodyOfAMeshInsideAClosedSolidIsACollisionReportedWhereItIs) {
+  const auto crate = bvh(box_mesh(Vec3(0, 0, 0), Vec3(1000, 1000, 1000)));
+  // Body 1 far outside, body 2 (a 10 mm cube) inside the crate, 100 mm from its nearest face.
+  const TriangleMesh two = joined(box_mesh(Vec3(5000, 0, 0), Vec3(5010, 10, 10)), box_mesh(Vec3(100, 400, 400), Vec3(110, 410, 410)));
+  ASSERT_EQ(two.body_seeds().size(), 2u);
+  for (const Vec3& offset : {Vec3(0, 0, 0), Vec3(5e4, -3e4, 2e3)}) {  // at the origin and at factory coordinates
+    const RigidTransform pose = RigidTransform::from_translation(offset);
+    const VerdictResult r = assess(*crate, pose, *bvh(two), pose).value();
+    ASSERT_EQ(r.verdict, Verdict::kCollision) << r.reason;
+    EXPECT_TRUE(r.contained);
+    // The point lies on the inner body, in world coordinates; its depth is its distance to the crate.
+    const Vec3 p = r.containment_point - offset;
+    EXPECT_GE(p.x(), 100.0 - 1e-6);
+    EXPECT_LE(p.x(), 110.0 + 1e-6);
+    EXPECT_NEAR(r.containment_depth_mm, 100.0, 1e-6);
+    EXPECT_EQ(r.point_a, r.containment_point);
+  }
+}
+
+TEST(Containment, AnOpenMeshInsideAClosedCrateInterferesAnOpenMeshContainsNothing) {
+  const auto crate = bvh(box_mesh(Vec3(0, 0, 0), Vec3(1000, 1000, 1000)));
+  // An open scan: a single triangle well inside.
+  const auto scan = bvh(TriangleMesh::create({Vec3(200, 200, 200), Vec3(300, 200, 200), Vec3(200, 300, 200)}, {{0, 1, 2}}).value());
+  const VerdictResult inside = assess(*crate, {}, *scan, {}).value();
+  EXPECT_EQ(inside.verdict, Verdict::kCollision) << inside.reason;
+  EXPECT_TRUE(inside.contained);
+  EXPECT_NEAR(inside.containment_depth_mm, 200.0, 1e-9);
+  // The other way round: the open triangle cannot contain the crate.
+  const VerdictResult swapped = assess(*scan, {}, *crate, {}).value();
+  EXPECT_EQ(swapped.verdict, Verdict::kCollision) << "the crate contains the scan whichever side it is";
+  // Outside the crate the scan is clear.
+  const VerdictResult out = assess(*crate, {}, *scan, RigidTransform::from_translation(Vec3(2000, 0, 0))).value();
+  EXPECT_EQ(out.verdict, Verdict::kClear);
+}
+
+TEST(Contacts, AFinelyMeshedBoxRestingOnAPlateTouchesWhateverTheContactCount) {
+  // 40 x 40 squares on each face: 3,200 triangles on the resting face alone, all coplanar with the
+  // plate's top: far more pairs than the 2,000 reported.
+  const auto plate = bvh(fine_box(Vec3(-100, -100, -10), Vec3(100, 100, 0), 40));
+  const auto box = bvh(fine_box(Vec3(-50, -50, 0), Vec3(50, 50, 60), 40));
+  VerdictOptions options;
+  options.max_contacts = 2000;
+  const VerdictResult rest = assess(*plate, {}, *box, {}, options).value();
+  EXPECT_EQ(rest.verdict, Verdict::kTouching) << rest.reason;
+  EXPECT_TRUE(rest.contacts_truncated);
+  EXPECT_EQ(rest.contacts.size(), 2000u);
+  // Lowered by 1 um, it crosses: a collision, with a crossing pair among those reported.
+  const VerdictResult sunk = assess(*plate, {}, *box, RigidTransform::from_translation(Vec3(0, 0, -1e-3)), options).value();
+  EXPECT_EQ(sunk.verdict, Verdict::kCollision) << sunk.reason;
+  ASSERT_GE(sunk.first_crossing, 0);
+  EXPECT_LT(static_cast<std::size_t>(sunk.first_crossing), sunk.contacts.size());
+}
+
+}  // namespace
+}  // namespace gk

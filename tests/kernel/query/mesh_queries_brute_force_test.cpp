@@ -1,0 +1,131 @@
+// The BVH queries against the all-pairs oracle on random meshes and poses: the contact pair set is
+// the same set exactly, the distance the same minimum to 1e-12 relative.
+#include "kernel/bvh/mesh_bvh.h"
+#include "kernel/query/mesh_collision.h"
+#include "kernel/query/mesh_distance.h"
+#include "tests/support/brute_force.h"
+#include "tests/support/random_meshes.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace gk {
+namespace {
+
+using testing::PairSet;
+using testing::Rng;
+
+struct Scenario {
+  std::shared_ptr<MeshBvh> a, b;
+  RigidTransform pose_a, pose_b;
+};
+
+Scenario make_scenario(Rng& rng, int round) {
+  Scenario s;
+  // Alternate closed blobs and soups, leaf sizes 1 and 3, near and far poses.
+  const bool soups = round % 2 == 1;
+  auto ma = soups ? testing::random_soup(rng, 120, 6.0, 2.0) : testing::random_closed_blob(rng, 2, 6.0, 0.5, Vec3::Zero());
+  auto mb = soups ? testing::random_soup(rng, 80, 5.0, 2.5) : testing::random_closed_blob(rng, 2, 5.0, 0.5, Vec3::Zero());
+  s.a = MeshBvh::build(testing::share(std::move(ma)), {1 + 2 * (round % 2)}).value();
+  s.b = MeshBvh::build(testing::share(std::move(mb)), {1 + 2 * ((round / 2) % 2)}).value();
+  s.pose_a = testing::random_pose(rng, 100.0);
+  // B near A: within a few mesh radii, so some poses collide and some do not.
+  const RigidTransform offset = testing::random_pose(rng, 14.0);
+  s.pose_b = s.pose_a * offset;
+  return s;
+}
+
+PairSet as_set(const CollisionResult& r) {
+  PairSet out;
+  for (const Contact& c : r.contacts) out.insert({c.triangle_a, c.triangle_b});
+  return out;
+}
+
+TEST(MeshQueriesBruteForce, ContactPairsFirstHitAndDistanceAgree) {
+  Rng rng(2024);
+  int colliding = 0, separate = 0;
+  for (int round = 0; round < 60; ++round) {
+    const Scenario s = make_scenario(rng, round);
+    const PairSet truth = testing::brute_force_contacts(s.a->mesh(), s.pose_a, s.b->mesh(), s.pose_b);
+
+    CollisionRequest all;
+    all.all_contacts = true;
+    const CollisionResult got = collide(*s.a, s.pose_a, *s.b, s.pose_b, all).value();
+    EXPECT_EQ(as_set(got), truth) << "round " << round;
+
+    const CollisionResult first = collide(*s.a, s.pose_a, *s.b, s.pose_b).value();
+    EXPECT_EQ(first.colliding, !truth.empty()) << "round " << round;
+    if (first.colliding) {
+      ASSERT_EQ(first.contacts.size(), 1u);
+      EXPECT_EQ(truth.count({first.contacts[0].triangle_a, first.contacts[0].triangle_b}), 1u);
+    }
+    (truth.empty() ? separate : colliding) += 1;
+
+    const double expected = testing::brute_force_distance(s.a->mesh(), s.pose_a, s.b->mesh(), s.pose_b);
+    const DistanceResult d = distance(*s.a, s.pose_a, *s.b, s.pose_b).value();
+    ASSERT_TRUE(d.found);
+    // Same triangle-distance routine on the same doubles: equal up to 1e-12 relative.
+    EXPECT_NEAR(d.distance_mm, expected, 1e-12 * std::max(1.0, expected)) << "round " << round;
+    // Witnesses are in world coordinates and as far apart as the distance (1e-9 relative).
+    EXPECT_NEAR((d.point_a - d.point_b).norm(), d.distance_mm, 1e-9 * std::max(1.0, d.distance_mm));
+    if (truth.empty()) {
+      EXPECT_GT(d.distance_mm, 0.0);
+    } else {
+      EXPECT_EQ(d.distance_mm, 0.0);
+    }
+  }
+  // The random poses must exercise both outcomes, or the test proves little.
+  EXPECT_GT(colliding, 10);
+  EXPECT_GT(separate, 10);
+}
+
+TEST(MeshQueriesBruteForce, ThresholdQueryAndPairsWithinDelta) {
+  Rng rng(99);
+  for (int round = 0; round < 40; ++round) {
+    const Scenario s = make_scenario(rng, round);
+    const double truth = testing::brute_force_distance(s.a->mesh(), s.pose_a, s.b->mesh(), s.pose_b);
+    for (double delta : {0.05, 0.5, 2.0}) {
+      DistanceRequest req;
+      req.upper_bound_mm = delta;
+      req.stop_below_mm = delta;
+      const DistanceResult d = distance(*s.a, s.pose_a, *s.b, s.pose_b, req).value();
+      EXPECT_EQ(d.found, truth < delta) << "round " << round << " delta " << delta << " truth " << truth;
+      if (d.found) {
+        EXPECT_LT(d.distance_mm, delta);
+      }
+
+      const PairSet within = testing::brute_force_pairs_within(s.a->mesh(), s.pose_a, s.b->mesh(), s.pose_b, delta);
+      const ProximityResult got = pairs_within(*s.a, s.pose_a, *s.b, s.pose_b, delta).value();
+      PairSet got_set;
+      for (const ProximityPair& p : got.pairs) got_set.insert({p.triangle_a, p.triangle_b});
+      EXPECT_EQ(got_set, within) << "round " << round << " delta " << delta;
+    }
+  }
+}
+
+TEST(MeshQueriesBruteForce, BadPosesAndRequestsAreErrorsNamingTheField) {
+  Rng rng(5);
+  const Scenario s = make_scenario(rng, 0);
+  RigidTransform nan_pose;
+  nan_pose.translation.x() = std::nan("");
+  auto c = collide(*s.a, nan_pose, *s.b, s.pose_b);
+  ASSERT_FALSE(c.ok());
+  EXPECT_EQ(c.error().field, "pose_a");
+  RigidTransform sheared;
+  sheared.rotation(0, 1) = 0.5;
+  auto d = distance(*s.a, s.pose_a, *s.b, sheared);
+  ASSERT_FALSE(d.ok());
+  EXPECT_EQ(d.error().field, "pose_b");
+  DistanceRequest bad;
+  bad.upper_bound_mm = -1.0;
+  auto e = distance(*s.a, s.pose_a, *s.b, s.pose_b, bad);
+  ASSERT_FALSE(e.ok());
+  EXPECT_EQ(e.error().field, "upper_bound_mm");
+  auto f = pairs_within(*s.a, s.pose_a, *s.b, s.pose_b, std::nan(""));
+  ASSERT_FALSE(f.ok());
+  EXPECT_EQ(f.error().field, "delta_mm");
+}
+
+}  // namespace
+}  // namespace gk
