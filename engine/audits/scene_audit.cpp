@@ -22,7 +22,6 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 
 // Depth on request uses a coarser lattice than ClearanceQuery: an audit has many pairs.
 constexpr int kAuditDepthDirections = 42;
-constexpr double kAuditDepthResolutionMm = 1e-3;
 constexpr int kAuditVolumeRaysPerAxis = 128;
 constexpr std::size_t kMaxTiles = 1u << 20;
 
@@ -86,7 +85,7 @@ bool audit_pair(const AuditObject& oa, const AuditObject& ob, const AuditOptions
     }
   }
   if (options.compute_depth && r.verdict == Verdict::kCollision) {
-    auto depth = penetration_vector(*oa.mesh, oa.pose, *ob.mesh, ob.pose, kAuditDepthDirections, kAuditDepthResolutionMm);
+    auto depth = penetration_vector(*oa.mesh, oa.pose, *ob.mesh, ob.pose, kAuditDepthDirections, tolerances::kAuditDepthResolutionMm);
     if (depth.ok()) {
       out.depth_mm = depth.value().depth_mm;
       out.depth_direction = depth.value().direction;

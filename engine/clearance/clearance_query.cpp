@@ -21,12 +21,10 @@ namespace gk::engine {
 namespace {
 
 constexpr std::size_t kMaxReportedPairs = 100000;
-constexpr double kDefaultRegionMergeMm = 10.0;
-// Depth: lattice size and contact resolution [mm] of the advancement along each candidate.
+// Depth: lattice size (the resolution is tolerances::kClearanceDepthResolutionMm).
 constexpr int kDepthLatticeDirections = 162;
 // How long the search over directions may run before the best found so far is reported [us].
 constexpr double kDepthBudgetUs = 2.0e6;
-constexpr double kDepthResolutionMm = 1e-4;
 constexpr int kVolumeRaysPerAxis = 256;
 
 struct PosedSide {
@@ -83,7 +81,7 @@ std::string add_depth(const PosedSide& a, const PosedSide& b, const Vec3& along,
   std::string method;
   bool exact = false;
   if (along != Vec3::Zero()) {
-    auto d = penetration_along(*a.part->bvh, a.pose, *b.part->bvh, b.pose, along, kDepthResolutionMm, stop);
+    auto d = penetration_along(*a.part->bvh, a.pose, *b.part->bvh, b.pose, along, tolerances::kClearanceDepthResolutionMm, stop);
     if (!d.ok()) return "depth: " + d.error().to_string() + "; ";
     depth = d.value().depth_mm;
     direction = along.normalized();
@@ -93,7 +91,7 @@ std::string add_depth(const PosedSide& a, const PosedSide& b, const Vec3& along,
     // tried gives a freeing depth, so the best so far is still a certified upper bound.
     const auto started = std::chrono::steady_clock::now();
     const StopToken budget([&] { return std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - started).count() > kDepthBudgetUs; });
-    auto found = penetration_vector(*a.part->bvh, a.pose, *b.part->bvh, b.pose, kDepthLatticeDirections, kDepthResolutionMm,
+    auto found = penetration_vector(*a.part->bvh, a.pose, *b.part->bvh, b.pose, kDepthLatticeDirections, tolerances::kClearanceDepthResolutionMm,
                                     stop, budget);
     if (!found.ok()) return "depth: " + found.error().to_string() + "; ";
     const DepthVector& d = found.value();
@@ -227,7 +225,7 @@ Result<ClearanceResult> clearance_query(const ClearanceRequest& request, PartReg
   if (!near.ok()) return near.error();
   result.pairs_within_gap = static_cast<std::uint32_t>(near.value().pairs.size());
   result.pairs_truncated = near.value().truncated;
-  add_regions(near.value().pairs, request.region_merge_mm > 0.0 ? request.region_merge_mm : kDefaultRegionMergeMm, a, b, result);
+  add_regions(near.value().pairs, request.region_merge_mm > 0.0 ? request.region_merge_mm : tolerances::kRegionMergeMm, a, b, result);
   result.gap_violated = v.verdict != Verdict::kClear || v.distance_mm < request.safety_gap_mm;
   const bool interpenetrating = v.verdict == Verdict::kCollision;
   std::string not_computed;

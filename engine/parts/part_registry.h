@@ -6,6 +6,7 @@
 #include "kernel/bvh/mesh_bvh.h"
 #include "occt_adapters/shape.h"
 #include "engine/parts/part_store.h"
+#include "kernel/core/tolerances.h"
 
 #include <map>
 #include <memory>
@@ -14,9 +15,8 @@
 
 namespace gk::engine {
 
-// CAD parts are tessellated at this chordal deflection [mm] for every query (it enters the error
-// bounds); one value, so a part is tessellated and its tree built once.
-inline constexpr double kPartDeflectionMm = 0.05;
+// CAD parts are tessellated at tolerances::kPartDeflectionMm for every query.
+inline constexpr double kPartDeflectionMm = tolerances::kPartDeflectionMm;
 
 // An uploaded part's geometry (engine/part_geometry) and its stored record.
 struct LoadedPart : engine::PartGeometry {

@@ -73,7 +73,7 @@ Result<std::unique_ptr<LayoutSession>> LayoutSession::create(std::vector<AuditOb
   // CAD parts: pairs within their tessellations' deviations of the clearance are reported too.
   double deviation = 0.0;
   for (const AuditObject& o : s->objects_) deviation = std::max(deviation, o.surface_deviation_mm);
-  s->needed_gap_mm_ = std::max(clearance_mm + 2.0 * deviation, tolerances::kContactMm) + 1e-9 * magnitude;
+  s->needed_gap_mm_ = std::max(clearance_mm + 2.0 * deviation, tolerances::kContactMm) + tolerances::kComparisonSlackRelative * magnitude;
   s->boxes_.resize(n);
   s->obbs_.resize(n);
   s->stamp_.assign(n, 0);
@@ -87,7 +87,7 @@ Result<std::unique_ptr<LayoutSession>> LayoutSession::create(std::vector<AuditOb
     s->boxes_[i] = transformed_box(o.mesh->root_bounds(), o.pose).expanded(0.5 * s->needed_gap_mm_);
   }
   s->moving_local_obb_ = local.at(s->objects_[moving].mesh.get());
-  s->grid_ = std::make_unique<UniformGrid>(s->boxes_, 1e-3, moving);
+  s->grid_ = std::make_unique<UniformGrid>(s->boxes_, tolerances::kLayoutGridMinCellMm, moving);
   return s;
 }
 

@@ -1,6 +1,7 @@
 #include "kernel/broadphase/broad_phase.h"
 
 #include "kernel/broadphase/uniform_grid.h"
+#include "kernel/core/tolerances.h"
 
 #include <algorithm>
 #include <cmath>
@@ -68,7 +69,7 @@ std::vector<IndexPair> sweep_and_prune(const std::vector<Aabb>& boxes, double ma
 
 std::vector<IndexPair> hash_grid_pairs(const std::vector<Aabb>& boxes, double margin_mm, HashGridStats* stats) {
   const std::vector<Aabb> g = grown(boxes, margin_mm);
-  const UniformGrid grid(g, 1e-6);
+  const UniformGrid grid(g, tolerances::kGridMinCellMm);
   std::vector<IndexPair> out;
   for (const auto& [cell, members] : grid.cells())
     for (std::size_t i = 0; i < members.size(); ++i)

@@ -1,4 +1,5 @@
-// Every tolerance of the kernel, in one place, with its unit and meaning.
+// Every tolerance of the project (kernel, machine models, engine), in one place, with its unit and
+// meaning. Work budgets (counts of pairs, samples, iterations) stay beside the code they bound.
 // Lengths are millimetres (mm), angles degrees (deg). Geometry is double precision throughout.
 #pragma once
 
@@ -22,6 +23,18 @@ inline constexpr double kRotationOrthonormality = 1.0e-9;
 // A triangle whose area is at most this is reported as zero-area by mesh validation; the exact
 // test (all three projected orientations zero) decides true degeneracy for queries. [mm^2]
 inline constexpr double kZeroAreaMm2 = 0.0;
+
+// Relative slack of comparisons between computed coordinates (a point on a box, a bend line on a
+// plate's edge, a gap grown for rounding), times the magnitude of the coordinates involved. [1]
+inline constexpr double kComparisonSlackRelative = 1.0e-9;
+
+// Smallest cell of the uniform grids of the broad phases: boxes thinner than this share a cell. [mm]
+inline constexpr double kGridMinCellMm = 1.0e-6;
+// ...and of a layout session's grid (its boxes are grown by the clearance already). [mm]
+inline constexpr double kLayoutGridMinCellMm = 1.0e-3;
+
+// A penetration depth along a direction is advanced until the parts are apart by at most this. [mm]
+inline constexpr double kDepthResolutionMm = 1.0e-6;
 
 // Largest coordinate magnitude accepted in a mesh or pose (1 km beyond the biggest factory). [mm]
 inline constexpr double kMaxCoordinateMm = 1.0e7;
@@ -59,6 +72,27 @@ inline constexpr double kClearanceReportWindowMm = 10.0;
 
 // The deepest penetration over a colliding motion is searched to within this. [mm]
 inline constexpr double kStepDepthResolutionMm = 1.0e-3;
+
+// Lengths compared in a machine model and its steps (a flange within its edge, a plate on the held
+// side of a bend line, a segment within a span, a shift within its range) agree within this. [mm]
+inline constexpr double kMachineLengthSlackMm = 1.0e-9;
+
+// A RETRACT correction pulls the manipulator back in steps of this, the smallest that clears. [mm]
+inline constexpr double kRetractResolutionMm = 8.0;
+
+// ---- the engine's queries ----
+
+// CAD parts are tessellated at this chordal deflection for every query (it enters the error
+// bounds; one value, so a part is tessellated and its tree built once). [mm]
+inline constexpr double kPartDeflectionMm = 0.05;
+
+// ClearanceQuery: the pairs closer than the gap this near each other form one region, unless the
+// request says otherwise. [mm]
+inline constexpr double kRegionMergeMm = 10.0;
+// ClearanceQuery's penetration depth is advanced to within this of the first free position... [mm]
+inline constexpr double kClearanceDepthResolutionMm = 1.0e-4;
+// ...and an audit's (thousands of pairs) to within this. [mm]
+inline constexpr double kAuditDepthResolutionMm = 1.0e-3;
 
 // ---- exact faces of CAD parts (decided on the B-Rep when the tessellation cannot tell) ----
 

@@ -6,6 +6,7 @@
 #include "kernel/query/mesh_collision.h"
 #include "kernel/query/mesh_distance.h"
 #include "kernel/core/units.h"
+#include "kernel/core/tolerances.h"
 
 #include <algorithm>
 #include <cmath>
@@ -171,7 +172,7 @@ bool meeting_intervals(const MeshBvh& a, const MeshBvh& b, const RigidTransform&
                        std::size_t max_pairs, std::vector<std::pair<double, double>>& out) {
   const MeshBvh::NodeView na = a.nodes(), nb = b.nodes();
   const Mat3 abs_r = b_in_a.rotation.cwiseAbs();
-  const double slack = 1e-9 * std::max({a.root_bounds().max.cwiseAbs().maxCoeff(), a.root_bounds().min.cwiseAbs().maxCoeff(),
+  const double slack = tolerances::kComparisonSlackRelative * std::max({a.root_bounds().max.cwiseAbs().maxCoeff(), a.root_bounds().min.cwiseAbs().maxCoeff(),
                                         b_in_a.translation.norm() + b.root_bounds().max.cwiseAbs().maxCoeff() +
                                             b.root_bounds().min.cwiseAbs().maxCoeff() + t_max, 1.0});
   const Vec3 sweep = t_max * u;

@@ -19,6 +19,7 @@
 #include "kernel/core/rigid_transform.h"
 #include "kernel/core/status.h"
 #include "kernel/core/stop_token.h"
+#include "kernel/core/tolerances.h"
 
 namespace gk {
 
@@ -32,7 +33,7 @@ struct DepthAlong {
 
 // direction: unit-length not required (normalised); tolerance_mm: contact resolution.
 Result<DepthAlong> penetration_along(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
-                                     const RigidTransform& pose_b, const Vec3& direction, double tolerance_mm = 1e-6,
+                                     const RigidTransform& pose_b, const Vec3& direction, double tolerance_mm = tolerances::kDepthResolutionMm,
                                      const StopToken& stop = {});
 
 struct DepthVector {
@@ -53,7 +54,7 @@ struct DepthVector {
 // if no direction was finished. Asks `enough` between directions (a time budget): once one
 // direction is finished, the best so far is returned (stopped_early).
 Result<DepthVector> penetration_vector(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
-                                       const RigidTransform& pose_b, int samples = 162, double tolerance_mm = 1e-6,
+                                       const RigidTransform& pose_b, int samples = 162, double tolerance_mm = tolerances::kDepthResolutionMm,
                                        const StopToken& stop = {}, const StopToken& enough = {});
 
 }  // namespace gk

@@ -2,7 +2,7 @@
 #pragma once
 
 #include "kernel/bvh/mesh_bvh.h"
-#include "kernel/internal/mesh_pair_frame.h"
+#include "kernel/query/mesh_pair_frame.h"
 #include "kernel/core/rigid_transform.h"
 #include "kernel/core/status.h"
 #include "kernel/core/stop_token.h"

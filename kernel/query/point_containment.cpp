@@ -2,6 +2,7 @@
 
 #include "kernel/internal/bvh_ray.h"
 #include "kernel/predicates/exact_predicates.h"
+#include "kernel/core/tolerances.h"
 
 #include <array>
 #include <cmath>
@@ -51,7 +52,7 @@ std::optional<int> crossings(const MeshBvh& mesh, const Vec3& p, const Vec3& q, 
 
 std::optional<bool> point_inside(const MeshBvh& mesh, const Vec3& point) {
   const Aabb box = mesh.root_bounds();
-  if (!box.expanded(1e-9 * (1.0 + box.max.cwiseAbs().maxCoeff())).overlaps(Aabb{point, point})) return false;
+  if (!box.expanded(tolerances::kComparisonSlackRelative * (1.0 + box.max.cwiseAbs().maxCoeff())).overlaps(Aabb{point, point})) return false;
   // Leave through the nearest face of the box: the shortest segment meets the fewest nodes.
   int axis = 0;
   double exit = std::numeric_limits<double>::infinity(), toward = 1.0;
@@ -60,7 +61,7 @@ std::optional<bool> point_inside(const MeshBvh& mesh, const Vec3& point) {
     if (point[k] - box.min[k] < exit) exit = point[k] - box.min[k], axis = k, toward = -1.0;
   }
   const double scale = 1.0 + std::max(box.max.cwiseAbs().maxCoeff(), box.min.cwiseAbs().maxCoeff());
-  const double slack = 1e-9 * scale;
+  const double slack = tolerances::kComparisonSlackRelative * scale;
   for (const Vec3& tilt : kTilts) {
     Vec3 d = Vec3::Zero();
     d[axis] = toward;

@@ -2,6 +2,7 @@
 // replaces the denied one, every motion it adds included; it is offered as verified only when
 // every step of it was validated, in its own machine state, and is CLEAR.
 #include "machine_models/p4/step_validator.h"
+#include "kernel/core/tolerances.h"
 
 #include <algorithm>
 #include <cmath>
@@ -12,7 +13,6 @@ namespace {
 bool is_aba(const std::string& organ) { return organ.rfind("aba.segment.", 0) == 0; }
 
 // How closely the smallest clearing retract is searched: a few validations fewer per halving. [mm]
-constexpr double kRetractResolutionMm = 8.0;
 
 // The x-range of the part's feature at a machine point: the plate nearest to it, placed for the step.
 std::pair<double, double> feature_x_range(const SheetPart& part, const BendStep& step, const Vec3& point) {
@@ -34,8 +34,10 @@ std::pair<double, double> feature_x_range(const SheetPart& part, const BendStep&
       const double gap = std::max({0.0, box.min[k] - point[k], point[k] - box.max[k]});
       sq += gap * gap;
     }
-    // The blank runs under everything: prefer the smaller feature when two touch the point.
-    if (sq < best - 1e-9 || (sq <= best + 1e-9 && hi - lo < range.second - range.first)) {
+    // The blank runs under everything: prefer the smaller feature when two touch the point (squared
+    // distances within 1e-9 mm^2 are a tie; which feature is named, not whether anything collides).
+    constexpr double kTieMm2 = 1e-9;
+    if (sq < best - kTieMm2 || (sq <= best + kTieMm2 && hi - lo < range.second - range.first)) {
       best = sq;
       range = {lo, hi};
     }
@@ -149,7 +151,7 @@ void StepValidator::add_correction(const SheetPart& part, const BendStep& step, 
       c.description = "no retract within the manipulator's travel clears the rotation";
       return;
     }
-    while (hi - lo > kRetractResolutionMm) {
+    while (hi - lo > tolerances::kRetractResolutionMm) {
       const double mid = 0.5 * (lo + hi);
       (turn_clears(mid) ? hi : lo) = mid;
     }

@@ -82,7 +82,7 @@ std::vector<Polygon> upper_faces(const HeldSide& held, double top_z, bool at_or_
       // A horizontal plate: two edges in the XY plane, the third vertical.
       int vertical = -1;
       for (int e = 0; e < 3; ++e)
-        if (std::fabs(p.edge[e].z()) > 1e-9 * std::max(1.0, p.edge[e].norm())) vertical = vertical < 0 ? e : 3;
+        if (std::fabs(p.edge[e].z()) > tolerances::kComparisonSlackRelative * std::max(1.0, p.edge[e].norm())) vertical = vertical < 0 ? e : 3;
       if (vertical < 0 || vertical > 2) continue;
       const Vec3& u = p.edge[(vertical + 1) % 3];
       const Vec3& v = p.edge[(vertical + 2) % 3];

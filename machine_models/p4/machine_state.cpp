@@ -2,6 +2,7 @@
 
 #include "kernel/core/content_hash.h"
 #include "machine_models/p4/machine_model.h"
+#include "kernel/core/tolerances.h"
 
 #include <cmath>
 
@@ -21,7 +22,7 @@ MachineState MachineState::with_aba_span(const MachineModel& model, double x_min
   s.engaged_segments.resize(model.aba.segment_widths_mm.size());
   const auto spans = model.slot_spans();
   for (std::size_t i = 0; i < s.engaged_segments.size(); ++i)
-    s.engaged_segments[i] = spans[i].first >= x_min - 1e-9 && spans[i].second <= x_max + 1e-9;
+    s.engaged_segments[i] = spans[i].first >= x_min - tolerances::kMachineLengthSlackMm && spans[i].second <= x_max + tolerances::kMachineLengthSlackMm;
   return s;
 }
 

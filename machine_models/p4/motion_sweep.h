@@ -12,6 +12,7 @@
 #include "machine_models/p4/convex_polytope.h"
 #include "machine_models/p4/machine_scene.h"
 #include "machine_models/p4/sheet_part.h"
+#include "kernel/core/tolerances.h"
 
 #include <memory>
 #include <vector>
@@ -84,7 +85,7 @@ struct AdvanceOptions {
   double required_clearance_mm = 0.1;  // closer than this counts as a collision
   // Advancement converges on a contact from above: within this of the required clearance it is
   // called a contact (the first-contact parameter is then exact to this distance). [mm]
-  double contact_resolution_mm = 1e-3;
+  double contact_resolution_mm = tolerances::kStepContactResolutionMm;
   double step_fraction = 0.8;          // of the proven-safe advance taken per step (certifies 1 - f)
   int max_steps = 20000;
   // When > 0, each body's own swept hull (sampled at most this far apart) first clears the organs

@@ -72,7 +72,7 @@ Result<SheetPart> SheetPart::create(const SheetPartSpec& spec) {
     const bool along_x = f.side == Side::kYMin || f.side == Side::kYMax;
     const double edge_length = along_x ? spec.width_mm : spec.depth_mm;
     const double length = f.length_mm > 0.0 ? f.length_mm : edge_length - f.start_mm;
-    if (f.start_mm < 0.0 || !(length > 0.0) || f.start_mm + length > edge_length + 1e-9)
+    if (f.start_mm < 0.0 || !(length > 0.0) || f.start_mm + length > edge_length + tolerances::kMachineLengthSlackMm)
       return invalid_argument(field + ".length_mm", "the flange must lie on its edge");
     const Vec3 n = outward(f.side);
     const Vec3 along = along_x ? Vec3::UnitX() : Vec3::UnitY();
@@ -240,18 +240,18 @@ Result<bool> SheetPart::split(const Vec2& point, const Vec2& direction, double o
       lo = std::min(lo, s);
       hi = std::max(hi, s);
     }
-    if (lo >= offset_mm - 1e-9) {
+    if (lo >= offset_mm - tolerances::kMachineLengthSlackMm) {
       moving.push_back(p);
       continue;
     }
-    if (hi <= offset_mm + 1e-9) {  // on the held side, or in the bend zone (held, checked where it stands)
+    if (hi <= offset_mm + tolerances::kMachineLengthSlackMm) {  // on the held side, or in the bend zone (held, checked where it stands)
       fixed.push_back(p);
       continue;
     }
     // The plane crosses the plate: it must cut one edge direction square.
     int k = -1;
     for (int e = 0; e < 3; ++e)
-      if (std::fabs(std::fabs(n.dot(p.edge[e])) - p.edge[e].norm()) <= 1e-9 * std::max(1.0, p.edge[e].norm())) k = e;
+      if (std::fabs(std::fabs(n.dot(p.edge[e])) - p.edge[e].norm()) <= tolerances::kComparisonSlackRelative * std::max(1.0, p.edge[e].norm())) k = e;
     if (k < 0) return invalid_argument("bend_line", "crosses plate '" + p.label + "' obliquely");
     const double s0 = n.dot(p.origin - q), rate = n.dot(p.edge[k]);
     auto piece = [&](double s_from, double s_to) {  // the part of p with s in [s_from, s_to]

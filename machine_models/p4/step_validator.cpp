@@ -7,6 +7,7 @@
 #include "machine_models/p4/manipulator_geometry.h"
 #include "machine_models/p4/organ_geometry.h"
 #include "kernel/core/units.h"
+#include "kernel/core/tolerances.h"
 
 #include <algorithm>
 #include <chrono>
@@ -291,7 +292,9 @@ Result<std::shared_ptr<const StepValidator::Prepared>> StepValidator::prepare(co
                                           std::to_string(model.max_bend_length_mm) + " mm");
   }
   const ManipulatorSpec& m = model.manipulator;
-  auto within = [](double v, const double range[2]) { return v >= range[0] - 1e-9 && v <= range[1] + 1e-9; };
+  auto within = [](double v, const double range[2]) {
+    return v >= range[0] - tolerances::kMachineLengthSlackMm && v <= range[1] + tolerances::kMachineLengthSlackMm;
+  };
   if (!within(grip.x(), m.travel_x_mm))
     deny(MachineLimit::kManipulatorTravelX, "manipulator x " + std::to_string(grip.x()) + " mm is outside its travel");
   if (!within(grip.y(), m.travel_y_mm))
