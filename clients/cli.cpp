@@ -18,6 +18,7 @@
 //   gatekeeper-cli audit-report JOB [--html report.html]
 // Exit status: 0 on OK, 1 on an RPC error (printed as JSON with its code), 2 on bad usage.
 #include "clients/channel_options.h"
+#include "clients/gatekeeper_client/audit_report.h"
 #include "clients/gatekeeper_client/upload.h"
 #include "gatekeeper/v1/gatekeeper.grpc.pb.h"
 
@@ -120,7 +121,8 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   grpc::ChannelArguments channel_args;
-  channel_args.SetMaxReceiveMessageSize(512 << 20);  // a whole factory's audit report and page
+  // The report's clashes come in pages; its HTML page holds every clash in one message.
+  if (!html_file.empty()) channel_args.SetMaxReceiveMessageSize(512 << 20);
   std::shared_ptr<grpc::Channel> channel;
   try {
     channel = connection.open(channel_args);
@@ -266,14 +268,17 @@ int main(int argc, char** argv) {
     return print_reply(stub->CancelAudit(&ctx, request, &reply), reply);
   }
   if (*audit_report) {
-    pb::GetAuditReportRequest request;
-    request.set_job_id(id);
-    request.set_html(!html_file.empty());
     pb::AuditReport reply;
-    const grpc::Status status = stub->GetAuditReport(&ctx, request, &reply);
+    const grpc::Status status = gk::client::read_audit_report(*stub, id, &reply);
     if (status.ok() && !html_file.empty()) {
-      std::ofstream(html_file, std::ios::binary) << reply.html();
-      reply.clear_html();
+      pb::GetAuditReportRequest request;
+      request.set_job_id(id);
+      request.set_html(true);
+      request.set_page_size(1);  // the page holds every clash; the reply's own list need not
+      pb::AuditReport with_page;
+      const grpc::Status page = stub->GetAuditReport(&ctx, request, &with_page);
+      if (!page.ok()) return print_reply(page, with_page);
+      std::ofstream(html_file, std::ios::binary) << with_page.html();
     }
     return print_reply(status, reply);
   }

@@ -57,8 +57,10 @@ Result<AuditOptions> to_audit_options(const pb::StartAuditRequest& in) {
   return asked;
 }
 
-void report_to_proto(const AuditSnapshot& snapshot, pb::AuditReport* out) {
-  for (const ClashRecord& r : snapshot.clashes) {
+void report_to_proto(const AuditSnapshot& snapshot, pb::AuditReport* out, std::size_t begin, std::size_t end) {
+  end = std::min(end, snapshot.clashes.size());
+  for (std::size_t i = std::min(begin, end); i < end; ++i) {
+    const ClashRecord& r = snapshot.clashes[i];
     const PairClash& c = r.clash;
     pb::Clash* p = out->add_clashes();
     p->set_object_a(r.a);
@@ -100,6 +102,25 @@ void report_to_proto(const AuditSnapshot& snapshot, pb::AuditReport* out) {
   out->set_broad_s(snapshot.broad_s);
   out->set_narrow_s(snapshot.narrow_s);
   out->set_recomputed_pairs(snapshot.pairs_done);
+}
+
+Result<ReportPage> report_page(const pb::GetAuditReportRequest& request, std::size_t clashes) {
+  constexpr std::uint32_t kMaxPageSize = 100000;
+  if (request.page_size() > kMaxPageSize) return invalid_argument("page_size", "at most 100000 clashes a page");
+  ReportPage page;
+  if (!request.page_token().empty()) {
+    // "<job id>@<offset>": a token of another job, or past the end, is refused rather than read.
+    const std::string prefix = request.job_id() + "@";
+    const std::string& token = request.page_token();
+    const std::string digits = token.rfind(prefix, 0) == 0 ? token.substr(prefix.size()) : std::string();
+    if (digits.empty() || digits.size() > 18 || digits.find_first_not_of("0123456789") != std::string::npos)
+      return invalid_argument("page_token", "not a token this job's report gave");
+    page.begin = static_cast<std::size_t>(std::stoull(digits));
+    if (page.begin > clashes) return invalid_argument("page_token", "beyond the report's clashes");
+  }
+  page.end = request.page_size() == 0 ? clashes : std::min(clashes, page.begin + request.page_size());
+  if (page.end < clashes) page.next_token = request.job_id() + "@" + std::to_string(page.end);
+  return page;
 }
 
 AuditSnapshot snapshot_from_report(const pb::AuditReport& report) {

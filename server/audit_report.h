@@ -15,7 +15,17 @@ Result<AuditOptions> to_audit_options(const pb::StartAuditRequest& in);
 void progress_to_proto(const std::string& job_id, const AuditSnapshot& s, pb::AuditProgress* out);
 
 // Clashes, their groups and the job's statistics (the progress is filled separately).
-void report_to_proto(const AuditSnapshot& snapshot, pb::AuditReport* out);
+// Only the clashes [begin, end) (the groups and statistics always cover every clash).
+void report_to_proto(const AuditSnapshot& snapshot, pb::AuditReport* out, std::size_t begin = 0,
+                     std::size_t end = static_cast<std::size_t>(-1));
+
+// A page of a report: the clashes [begin, end) and the token of the next page (empty: the last).
+struct ReportPage {
+  std::size_t begin = 0, end = 0;
+  std::string next_token;
+};
+// The page a request asks for; an error names page_size or page_token.
+Result<ReportPage> report_page(const pb::GetAuditReportRequest& request, std::size_t clashes);
 
 // The other way, for a finished audit kept on disk: the snapshot its report describes.
 AuditSnapshot snapshot_from_report(const pb::AuditReport& report);

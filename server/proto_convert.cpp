@@ -224,6 +224,7 @@ void to_proto(const p4::StepAnswer& a, pb::ValidateStepResponse* out) {
   out->set_verdict(to_proto(a.verdict));
   out->set_reason(a.reason);
   out->set_decided_by(p4::to_string(a.decided_by));
+  out->set_deciding_stage(to_proto(a.decided_by));
   out->set_inconclusive_reason(to_proto(a.denial));
   out->set_limit(to_proto(a.limit));
   for (const p4::StepCollision& c : a.collisions) {
@@ -337,6 +338,41 @@ Verdict from_proto(pb::Verdict v) {
   }
 }
 
+pb::DecidingStage to_proto(p4::Stage stage) {
+  switch (stage) {
+    case p4::Stage::kCache: return pb::DECIDING_STAGE_CACHE;
+    case p4::Stage::kLimits: return pb::DECIDING_STAGE_LIMITS;
+    case p4::Stage::kStatic: return pb::DECIDING_STAGE_STATIC;
+    case p4::Stage::kGlobalBox: return pb::DECIDING_STAGE_GLOBAL_BOX;
+    case p4::Stage::kBroadPhase: return pb::DECIDING_STAGE_BROAD_PHASE;
+    case p4::Stage::kHullLod: return pb::DECIDING_STAGE_HULL_LOD;
+    case p4::Stage::kNarrow: return pb::DECIDING_STAGE_NARROW;
+  }
+  return pb::DECIDING_STAGE_UNSPECIFIED;
+}
+
+pb::DepthMethod to_proto(engine::DepthMethod m) {
+  switch (m) {
+    case engine::DepthMethod::kNone: return pb::DEPTH_METHOD_UNSPECIFIED;
+    case engine::DepthMethod::kAlongRequested: return pb::DEPTH_METHOD_ALONG_REQUESTED;
+    case engine::DepthMethod::kPieceOrPartAxis: return pb::DEPTH_METHOD_PIECE_OR_PART_AXIS;
+    case engine::DepthMethod::kLatticeDirection: return pb::DEPTH_METHOD_LATTICE_DIRECTION;
+    case engine::DepthMethod::kBetweenCentres: return pb::DEPTH_METHOD_BETWEEN_CENTRES;
+  }
+  return pb::DEPTH_METHOD_UNSPECIFIED;
+}
+
+pb::VolumeMethod to_proto(engine::SharedVolumeMethod m) {
+  switch (m) {
+    case engine::SharedVolumeMethod::kNone: return pb::VOLUME_METHOD_UNSPECIFIED;
+    case engine::SharedVolumeMethod::kApart: return pb::VOLUME_METHOD_APART;
+    case engine::SharedVolumeMethod::kBrepBooleanCommon: return pb::VOLUME_METHOD_BREP_BOOLEAN_COMMON;
+    case engine::SharedVolumeMethod::kMeshExactCorefinement: return pb::VOLUME_METHOD_MESH_EXACT_COREFINEMENT;
+    case engine::SharedVolumeMethod::kMeshRayCast: return pb::VOLUME_METHOD_MESH_RAY_CAST;
+  }
+  return pb::VOLUME_METHOD_UNSPECIFIED;
+}
+
 Result<engine::ClearanceRequest> to_clearance_request(const pb::ClearanceQueryRequest& in) {
   engine::ClearanceRequest out;
   for (auto [side, from, name] : {std::tuple{&out.a, &in.a(), "a"}, std::tuple{&out.b, &in.b(), "b"}}) {
@@ -388,6 +424,7 @@ void to_proto(const engine::ClearanceResult& r, pb::ClearanceQueryResponse* out)
   if (r.depth_direction != Vec3::Zero()) to_proto(r.depth_direction, out->mutable_depth_direction());
   out->set_depth_exact(r.depth_exact);
   out->set_depth_method(r.depth_method);
+  out->set_depth_method_kind(to_proto(r.depth_method_kind));
   out->set_depth_max_angle_deg(r.depth_max_angle_deg);
   out->set_depth_pieces_a(r.depth_pieces_a);
   out->set_depth_pieces_b(r.depth_pieces_b);
@@ -395,6 +432,7 @@ void to_proto(const engine::ClearanceResult& r, pb::ClearanceQueryResponse* out)
   out->set_volume_error_bound_mm3(r.volume_error_bound_mm3);
   out->set_volume_cell_mm(r.volume_cell_mm);
   out->set_volume_method(r.volume_method);
+  out->set_volume_method_kind(to_proto(r.volume_method_kind));
   out->set_not_computed(r.not_computed);
   out->set_elapsed_us(r.elapsed_us);
 }

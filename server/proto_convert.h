@@ -34,6 +34,9 @@ void to_proto(const Vec3& v, pb::Vec3* out);
 void to_proto(const PartRecord& record, pb::PartInfo* out);
 
 pb::Verdict to_proto(Verdict v);
+pb::DecidingStage to_proto(p4::Stage stage);
+pb::DepthMethod to_proto(engine::DepthMethod m);
+pb::VolumeMethod to_proto(engine::SharedVolumeMethod m);
 pb::InconclusiveReason to_proto(InconclusiveReason r);
 Verdict from_proto(pb::Verdict v);
 InconclusiveReason from_proto(pb::InconclusiveReason r);

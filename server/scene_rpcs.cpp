@@ -282,9 +282,20 @@ grpc::ServerUnaryReactor* GatekeeperService::GetAuditReport(grpc::CallbackServer
     auto job = engine_.audit(get.job_id());
     if (!job.ok()) return grpc::Status(to_status(job.error()));
     const AuditSnapshot snapshot = job.value()->snapshot();
+    auto page = report_page(get, snapshot.clashes.size());
+    if (!page.ok()) return grpc::Status(to_status(page.error()));
     progress_to_proto(get.job_id(), snapshot, out->mutable_progress());
-    report_to_proto(snapshot, out);
-    if (get.html()) out->set_html(audit_report_page(*out, job.value()->scene().name, job.value()->objects()));
+    report_to_proto(snapshot, out, page.value().begin, page.value().end);
+    out->set_clashes_total(snapshot.clashes.size());
+    out->set_page_offset(page.value().begin);
+    out->set_next_page_token(page.value().next_token);
+    if (get.html()) {
+      // The page shows every clash, whichever page of them this reply holds.
+      pb::AuditReport whole;
+      progress_to_proto(get.job_id(), snapshot, whole.mutable_progress());
+      report_to_proto(snapshot, &whole);
+      out->set_html(audit_report_page(whole, job.value()->scene().name, job.value()->objects()));
+    }
     return grpc::Status(grpc::Status::OK);
   });
 }

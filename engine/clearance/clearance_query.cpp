@@ -79,6 +79,7 @@ std::string add_depth(const PosedSide& a, const PosedSide& b, const Vec3& along,
   double depth = 0.0;
   Vec3 direction = Vec3::Zero();
   std::string method;
+  DepthMethod kind = DepthMethod::kNone;
   bool exact = false;
   if (along != Vec3::Zero()) {
     auto d = penetration_along(*a.part->bvh, a.pose, *b.part->bvh, b.pose, along, tolerances::kClearanceDepthResolutionMm, stop);
@@ -86,6 +87,7 @@ std::string add_depth(const PosedSide& a, const PosedSide& b, const Vec3& along,
     depth = d.value().depth_mm;
     direction = along.normalized();
     method = "along the requested direction";
+    kind = DepthMethod::kAlongRequested;
   } else {
     // The directions are tried within a time budget (or until the caller gives up): every one
     // tried gives a freeing depth, so the best so far is still a certified upper bound.
@@ -99,6 +101,7 @@ std::string add_depth(const PosedSide& a, const PosedSide& b, const Vec3& along,
     direction = d.direction;
     exact = d.exact;
     method = d.from_piece_axis ? "convex-piece or part axis" : "lattice direction";
+    kind = d.from_piece_axis ? DepthMethod::kPieceOrPartAxis : DepthMethod::kLatticeDirection;
     if (d.stopped_early)
       method += " (time budget: " + std::to_string(d.directions_tried) + " directions tried)";
     result.depth_max_angle_deg = d.max_angle_between_samples_deg;
@@ -112,6 +115,7 @@ std::string add_depth(const PosedSide& a, const PosedSide& b, const Vec3& along,
     if (!(direction.norm() > 0.0)) direction = Vec3::UnitZ();
     direction.normalize();
     method = "between the parts' centres";
+    kind = DepthMethod::kBetweenCentres;
   }
   auto checked = check_depth_on_brep(pa, pb_, direction, depth, stop);
   if (!checked.ok()) return "depth: " + checked.error().message + "; ";
@@ -124,6 +128,7 @@ std::string add_depth(const PosedSide& a, const PosedSide& b, const Vec3& along,
   result.depth_mm = checked.value().depth_mm;
   result.depth_exact = exact;
   result.depth_method = method;
+  result.depth_method_kind = kind;
   return "";
 }
 
@@ -151,6 +156,7 @@ std::string add_volume(const PosedSide& a, const PosedSide& b, const Vec3& near_
       result.volume_error_bound_mm3 = exact.value().error_bound_mm3;
       result.volume_cell_mm = 0.0;
       result.volume_method = "brep boolean common";
+      result.volume_method_kind = SharedVolumeMethod::kBrepBooleanCommon;
       return "";
     }
     why_not_brep = " (the Boolean common failed: " + exact.error().message + ")";
@@ -169,6 +175,8 @@ std::string add_volume(const PosedSide& a, const PosedSide& b, const Vec3& near_
   result.interference_volume_mm3 = volume.value().volume_mm3;
   result.volume_error_bound_mm3 = volume.value().error_bound_mm3 + band;
   result.volume_cell_mm = volume.value().cell_mm;
+  result.volume_method_kind = volume.value().method == VolumeMethod::kExactCorefinement ? SharedVolumeMethod::kMeshExactCorefinement
+                                                                                       : SharedVolumeMethod::kMeshRayCast;
   if (volume.value().method == VolumeMethod::kExactCorefinement)
     result.volume_method = "mesh exact corefinement" + on_tessellation + why_not_brep;
   else if (!volume.value().exact_not_used.empty())
@@ -243,6 +251,7 @@ Result<ClearanceResult> clearance_query(const ClearanceRequest& request, PartReg
       result.interference_volume_mm3 = 0.0;
       result.volume_error_bound_mm3 = 0.0;
       result.volume_method = "apart: nothing shared";
+      result.volume_method_kind = SharedVolumeMethod::kApart;
     } else {
       result.interference_volume_mm3 = -1.0;
       not_computed += "volume: the verdict is INCONCLUSIVE; ";

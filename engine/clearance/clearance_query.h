@@ -32,6 +32,24 @@ struct ClearanceRequest {
   bool compute_volume = false;    // touching or interpenetrating parts: the shared volume
 };
 
+// How the penetration depth was found.
+enum class DepthMethod {
+  kNone,                   // not computed
+  kAlongRequested,         // along the requested direction
+  kPieceOrPartAxis,        // a separating axis of the convex pieces or of the parts
+  kLatticeDirection,       // one of the lattice's directions
+  kBetweenCentres,         // the tessellations were free: along the centres' line, checked on the exact faces
+};
+
+// How the shared volume was measured.
+enum class SharedVolumeMethod {
+  kNone,                   // not computed
+  kApart,                  // CLEAR: nothing shared
+  kBrepBooleanCommon,      // OCCT's Boolean common of two CAD parts
+  kMeshExactCorefinement,  // CGAL's corefinement in rational arithmetic
+  kMeshRayCast,            // a ray-cast grid with a proven bound
+};
+
 // The pairs closer than the gap, grouped.
 struct ClearanceRegion {
   double min_distance_mm = 0.0;
@@ -62,14 +80,16 @@ struct ClearanceResult {
   double depth_mm = 0.0;
   Vec3 depth_direction = Vec3::Zero();
   bool depth_exact = false;
-  std::string depth_method;
+  DepthMethod depth_method_kind = DepthMethod::kNone;
+  std::string depth_method;  // the same in words, with what it took
   double depth_max_angle_deg = 0.0;
   std::uint32_t depth_pieces_a = 0, depth_pieces_b = 0;
   // Shared volume (on request): |interference_volume_mm3 - true| <= volume_error_bound_mm3.
   double interference_volume_mm3 = 0.0;
   double volume_error_bound_mm3 = 0.0;
   double volume_cell_mm = 0.0;
-  std::string volume_method;
+  SharedVolumeMethod volume_method_kind = SharedVolumeMethod::kNone;
+  std::string volume_method;  // the same in words, with why a better one was not used
   std::string not_computed;  // why a requested measure is absent
   double elapsed_us = 0.0;
 };

@@ -1,5 +1,6 @@
 #include "tests/server/daemon_fixture.h"
 
+#include "clients/gatekeeper_client/audit_report.h"
 #include "clients/gatekeeper_client/upload.h"
 
 #include <gtest/gtest.h>
@@ -136,13 +137,22 @@ gatekeeper::v1::AuditReport run_audit(gatekeeper::v1::Gatekeeper::Stub& stub, co
   while (reader->Read(&progress)) {
   }
   EXPECT_TRUE(reader->Finish().ok());
-  grpc::ClientContext rctx;
-  rctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
-  pb::GetAuditReportRequest get;
-  get.set_job_id(job.job_id());
-  get.set_html(html);
+  // Read page by page (pages of 7: most reports here span several), the page separately.
   pb::AuditReport report;
-  EXPECT_TRUE(stub.GetAuditReport(&rctx, get, &report).ok());
+  client::ReportOptions paging;
+  paging.page_size = 7;
+  EXPECT_TRUE(client::read_audit_report(stub, job.job_id(), &report, paging).ok());
+  EXPECT_EQ(static_cast<std::uint64_t>(report.clashes_size()), report.clashes_total());
+  if (html) {
+    grpc::ClientContext rctx;
+    rctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+    pb::GetAuditReportRequest get;
+    get.set_job_id(job.job_id());
+    get.set_html(true);
+    pb::AuditReport with_page;
+    EXPECT_TRUE(stub.GetAuditReport(&rctx, get, &with_page).ok());
+    report.set_html(with_page.html());
+  }
   return report;
 }
 

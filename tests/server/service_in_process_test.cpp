@@ -15,6 +15,7 @@
 #include <cmath>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace gk::server {
 namespace {
@@ -84,6 +85,8 @@ TEST(ServiceInProcess, ValidateStepAndValidateStepsAnswerTheBeamAtItsClosedFormA
   EXPECT_NEAR(tall.collisions(0).first_contact_deg(), std::asin((203.0 - 0.1) / 300.0) * 180.0 / kPi, 0.01);
   ASSERT_TRUE(s.stub().ValidateStep(context().get(), bend_request(300.0, 90.0), &again).ok());
   EXPECT_EQ(again.decided_by(), "cache");
+  EXPECT_EQ(again.deciding_stage(), pb::DECIDING_STAGE_CACHE);
+  EXPECT_NE(tall.deciding_stage(), pb::DECIDING_STAGE_UNSPECIFIED);
   EXPECT_EQ(again.verdict(), pb::COLLISION);
   pb::ValidateStepsRequest batch;
   *batch.add_steps() = bend_request(100.0, 90.0);
@@ -124,6 +127,7 @@ TEST(ServiceInProcess, UploadPartGetPartInfoAndClearanceQueryAgreeWithTheBoxesDi
   EXPECT_EQ(apart.verdict(), pb::CLEAR);
   EXPECT_NEAR(apart.distance_mm(), 5.0, 1e-9);
   EXPECT_TRUE(apart.gap_violated());
+  EXPECT_EQ(apart.depth_method_kind(), pb::DEPTH_METHOD_UNSPECIFIED);
   EXPECT_GT(apart.regions_size(), 0);
   // Overlapping by 2 mm in x: COLLISION, the depth along -x is 2 mm and the shared volume 2*100*100.
   *q.mutable_b()->mutable_pose() = at(50098.0, 0.0, 0.0);
@@ -134,6 +138,10 @@ TEST(ServiceInProcess, UploadPartGetPartInfoAndClearanceQueryAgreeWithTheBoxesDi
   ASSERT_TRUE(s.stub().ClearanceQuery(context().get(), q, &crossing).ok());
   EXPECT_EQ(crossing.verdict(), pb::COLLISION);
   EXPECT_NEAR(crossing.depth_mm(), 2.0, 1e-3);
+  EXPECT_EQ(crossing.depth_method_kind(), pb::DEPTH_METHOD_ALONG_REQUESTED);
+  EXPECT_TRUE(crossing.volume_method_kind() == pb::VOLUME_METHOD_MESH_RAY_CAST ||
+              crossing.volume_method_kind() == pb::VOLUME_METHOD_MESH_EXACT_COREFINEMENT)
+      << crossing.volume_method();
   EXPECT_LE(std::abs(crossing.interference_volume_mm3() - 20000.0), crossing.volume_error_bound_mm3() + 1e-6);
   // A bad field is named.
   q.set_safety_gap_mm(-1.0);
@@ -309,6 +317,37 @@ TEST(ServiceInProcess, AnAuditIsStartedWatchedReportedAndCancelled) {
   EXPECT_EQ(report.by_category(0).key(), "fence / robot");
   EXPECT_EQ(report.by_category(0).clashes(), 9u);
   EXPECT_NE(report.html().find("<html"), std::string::npos);
+  // Read in pages of 4: 4, 4 and 1 clashes, in the report's order; tokens of another job or past
+  // the end, and pages beyond the limit, are refused naming the field.
+  pb::GetAuditReportRequest paged;
+  paged.set_job_id(report.progress().job_id());
+  paged.set_page_size(4);
+  std::vector<std::string> order;
+  int pages = 0;
+  for (;;) {
+    pb::AuditReport page;
+    ASSERT_TRUE(s.stub().GetAuditReport(context().get(), paged, &page).ok());
+    ++pages;
+    EXPECT_EQ(page.clashes_total(), 9u);
+    EXPECT_EQ(page.by_category_size(), 1);
+    for (const pb::Clash& c : page.clashes()) order.push_back(c.object_a() + "/" + c.object_b());
+    if (page.next_page_token().empty()) break;
+    paged.set_page_token(page.next_page_token());
+  }
+  EXPECT_EQ(pages, 3);
+  ASSERT_EQ(order.size(), 9u);
+  for (int i = 0; i < 9; ++i) EXPECT_EQ(order[i], report.clashes(i).object_a() + "/" + report.clashes(i).object_b());
+  for (const std::string& token : {std::string("audit-other@4"), report.progress().job_id() + "@10", std::string("4")}) {
+    paged.set_page_token(token);
+    pb::AuditReport refused_page;
+    const grpc::Status bad = s.stub().GetAuditReport(context().get(), paged, &refused_page);
+    EXPECT_EQ(bad.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << token;
+    EXPECT_NE(bad.error_message().find("page_token"), std::string::npos) << bad.error_message();
+  }
+  paged.clear_page_token();
+  paged.set_page_size(100001);
+  pb::AuditReport too_large;
+  EXPECT_EQ(s.stub().GetAuditReport(context().get(), paged, &too_large).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   // Cancelling an ended job leaves it as it ended.
   pb::CancelAuditRequest cancel;
   cancel.set_job_id(report.progress().job_id());

@@ -58,3 +58,22 @@ def connect_from_arguments(args):
     token = _read(args.token_file).decode().strip() if args.token_file else None
     return connect(args.address, tls_ca=args.tls_ca, tls_cert=args.tls_cert, tls_key=args.tls_key, token=token,
                    server_name=args.tls_server_name)
+
+
+def read_audit_report(stub, job_id, page_size=5000, timeout=120.0):
+    """An audit's whole report, read in pages of page_size clashes (a factory's report exceeds
+    gRPC's default 4 MiB receive limit in one reply); its HTML page is asked for separately."""
+    request = pb.GetAuditReportRequest(job_id=job_id, page_size=page_size)
+    report = None
+    while True:
+        page = stub.GetAuditReport(request, timeout=timeout)
+        if report is None:
+            report = page
+        else:
+            report.clashes.extend(page.clashes)
+            report.progress.CopyFrom(page.progress)
+        if not page.next_page_token:
+            break
+        request.page_token = page.next_page_token
+    report.next_page_token = ""
+    return report

@@ -9,7 +9,7 @@ import hashlib
 import os
 import sys
 
-from gatekeeper_client.connection import add_connection_arguments, connect_from_arguments, pb
+from gatekeeper_client.connection import add_connection_arguments, connect_from_arguments, pb, read_audit_report
 
 # An installed package does not know where the checkout's ../shared/data is: the caller says.
 DEFAULT_DATA = os.environ.get("GATEKEEPER_SHARED_DATA")
@@ -86,7 +86,7 @@ def main(argv=None):
         last = p
         print("\r  audit " + progress_bar(p), end="", flush=True)
     print()
-    report = stub.GetAuditReport(pb.GetAuditReportRequest(job_id=job.job_id, html=bool(args.report)), timeout=30)
+    report = read_audit_report(stub, job.job_id)
     print(f"audit {pb.AuditState.Name(report.progress.state)}: {len(report.clashes)} clashes "
           f"({report.candidate_pairs} box pairs, {report.excluded_by_rules} excluded by rules)")
     for clash in report.clashes:
@@ -94,8 +94,9 @@ def main(argv=None):
     for group in report.by_category:
         print(f"  {group.key}: {group.clashes} clashes, {group.collisions} collisions")
     if args.report:
+        page = stub.GetAuditReport(pb.GetAuditReportRequest(job_id=job.job_id, html=True, page_size=1), timeout=60)
         with open(args.report, "w", encoding="utf-8") as out:
-            out.write(report.html)
+            out.write(page.html)
         print(f"report page: {args.report}")
     return 0 if last is not None and report.progress.state == pb.DONE else 1
 
