@@ -86,6 +86,8 @@ Result<bool> Engine::check_object(const SceneObjectRecord& o, const std::string&
 Result<PlacedMove> Engine::put_object(const std::string& scene_id, SceneObjectRecord object, double clearance_mm,
                                       const StopToken& stop) {
   if (auto bad = check_object(object, "object"); !bad.ok()) return bad.error();
+  if (auto bad = checked_pose(object.pose.translation, object.pose.axis, object.pose.angle_deg, "object.pose"); !bad.ok())
+    return bad.error();
   if (auto bad = check_clearance(clearance_mm); !bad.ok()) return bad.error();
   auto stored = scenes_.put(scene_id, std::move(object));
   if (!stored.ok()) return stored.error();
@@ -110,6 +112,7 @@ Result<std::vector<SceneObjectRecord>> Engine::put_objects(const std::string& sc
     for (const auto& [text, name] : {std::pair<const std::string*, const char*>{&o.name, ".name"}, {&o.category, ".category"},
                                      {&o.group, ".group"}})
       if (auto bad = check_label(*text, field + name); !bad.ok()) return bad.error();
+    if (auto bad = checked_pose(o.pose.translation, o.pose.axis, o.pose.angle_deg, field + ".pose"); !bad.ok()) return bad.error();
     if (known_parts.count(o.part_id)) continue;
     auto part = parts_.store().get(o.part_id);
     if (!part.ok()) return Error{part.error().code, field + ".part_id", part.error().message};
@@ -120,6 +123,7 @@ Result<std::vector<SceneObjectRecord>> Engine::put_objects(const std::string& sc
 
 Result<MoveOutcome> Engine::move_object(const std::string& scene_id, const std::string& object_id, const StoredPose& pose,
                                         double clearance_mm, DragSession* drag, const StopToken& stop) {
+  if (auto bad = checked_pose(pose.translation, pose.axis, pose.angle_deg, "pose"); !bad.ok()) return bad.error();
   if (auto bad = check_clearance(clearance_mm); !bad.ok()) return bad.error();
   auto moved = scenes_.move(scene_id, object_id, pose);
   if (!moved.ok()) return moved.error();

@@ -1,6 +1,9 @@
 #include "engine/input_checks.h"
 
+#include "kernel/core/tolerances.h"
+
 #include <cctype>
+#include <cmath>
 
 namespace gk::engine {
 
@@ -28,6 +31,23 @@ Result<bool> check_label(const std::string& text, const std::string& field) {
       return invalid_argument(field, "holds a control or bidirectional formatting character (NUL, newline, DEL, U+202E, ...)");
   }
   return true;
+}
+
+Result<StoredPose> checked_pose(const Vec3& translation, const Vec3& axis, double angle_deg, const std::string& field) {
+  if (!translation.allFinite()) return invalid_argument(field + ".translation", "must be finite");
+  if (!std::isfinite(angle_deg)) return invalid_argument(field + ".rotation_deg", "must be finite");
+  if (translation.cwiseAbs().maxCoeff() > tolerances::kMaxCoordinateMm)
+    return invalid_argument(field + ".translation", "beyond 1e7 mm from the origin");
+  StoredPose pose;
+  pose.translation = translation;
+  if (angle_deg == 0.0) return pose;
+  const double largest = axis.allFinite() ? axis.cwiseAbs().maxCoeff() : 0.0;
+  if (!(largest > 0.0)) return invalid_argument(field + ".rotation_axis", "must be a finite, non-zero vector");
+  // Scaled before normalising: (1e200, 0, 1) squared would overflow to infinity.
+  pose.axis = axis / largest;
+  pose.angle_deg = angle_deg;
+  if (!pose.transform().is_rigid()) return invalid_argument(field + ".rotation_axis", "does not give a rigid rotation");
+  return pose;
 }
 
 }  // namespace gk::engine

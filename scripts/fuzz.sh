@@ -49,7 +49,7 @@ for target in "${TARGETS[@]}"; do
   log="build-fuzz/fuzz-$name.log"
   if [ "$name" = shape_file ]; then
     # OCCT's readers crash on some malformed CAD files; the daemon reads every CAD file in a child
-    # process first (server/cad_sandbox.h, tested end to end by HostileClientE2E), so such a crash
+    # process first (engine/parts/cad_sandbox.h, tested end to end by HostileClientE2E), so such a crash
     # is contained. The fuzzer keeps going past them (-fork, -ignore_crashes) and the run fails
     # only when a crash's innermost frame is outside OCCT's libraries (libTK*): ours.
     echo "== $target: fuzzing for ${SECONDS_PER_TARGET} s (crashes inside OCCT are counted, not fatal)"

@@ -8,7 +8,7 @@
 // Without TLS it serves loopback addresses only (see server/access_control.h). Everything it
 // writes is private to its user: the data directory 0700, files 0600 (umask 077). CAD files are
 // first read in a child process, this program run as `gatekeeperd --check-cad ...`
-// (server/cad_sandbox.h): a reader that crashes on a malformed file takes only the child down.
+// (engine/parts/cad_sandbox.h): a reader that crashes on a malformed file takes only the child down.
 //
 // Starts with the embedded default P4 machine model; health (grpc.health.v1) and reflection
 // (v1alpha) are served; SIGTERM or SIGINT shut it down gracefully (health NOT_SERVING, in-flight

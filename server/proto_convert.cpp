@@ -1,5 +1,7 @@
 #include "server/proto_convert.h"
 
+#include "engine/input_checks.h"
+
 #include "kernel/core/tolerances.h"
 #include "kernel/core/units.h"
 
@@ -109,19 +111,9 @@ Result<engine::StepPart> to_step_part(const pb::SheetPart& in) {
 }
 
 Result<RigidTransform> to_pose(const pb::Pose& in, const std::string& field) {
-  const Vec3 t(in.translation().x_mm(), in.translation().y_mm(), in.translation().z_mm());
-  const Vec3 axis(in.rotation_axis().x_mm(), in.rotation_axis().y_mm(), in.rotation_axis().z_mm());
-  if (!t.allFinite()) return invalid_argument(field + ".translation", "must be finite");
-  if (!std::isfinite(in.rotation_deg())) return invalid_argument(field + ".rotation_deg", "must be finite");
-  if (t.cwiseAbs().maxCoeff() > tolerances::kMaxCoordinateMm)
-    return invalid_argument(field + ".translation", "beyond 1e7 mm from the origin");
-  if (in.rotation_deg() == 0.0) return RigidTransform::from_translation(t);
-  const double largest = axis.allFinite() ? axis.cwiseAbs().maxCoeff() : 0.0;
-  if (!(largest > 0.0)) return invalid_argument(field + ".rotation_axis", "must be a finite, non-zero vector");
-  // Scaled before normalising: (1e200, 0, 1) squared would overflow to infinity.
-  const RigidTransform pose = RigidTransform::from_axis_angle(axis / largest, in.rotation_deg() * kPi / 180.0, t);
-  if (!pose.is_rigid()) return invalid_argument(field + ".rotation_axis", "does not give a rigid rotation");
-  return pose;
+  auto pose = to_stored_pose(in, field);
+  if (!pose.ok()) return pose.error();
+  return pose.value().transform();
 }
 
 pb::Verdict to_proto(Verdict v) {
@@ -277,17 +269,9 @@ void to_proto(const p4::StepAnswer& a, pb::ValidateStepResponse* out) {
 }
 
 Result<StoredPose> to_stored_pose(const pb::Pose& in, const std::string& field) {
-  auto checked = to_pose(in, field);  // validates finiteness and the axis
-  if (!checked.ok()) return checked.error();
-  StoredPose p;
-  p.translation = Vec3(in.translation().x_mm(), in.translation().y_mm(), in.translation().z_mm());
-  if (in.rotation_deg() != 0.0) {
-    // Stored as the rotation it was checked as (scaled so that its largest component is 1).
-    const Vec3 axis(in.rotation_axis().x_mm(), in.rotation_axis().y_mm(), in.rotation_axis().z_mm());
-    p.axis = axis / axis.cwiseAbs().maxCoeff();
-    p.angle_deg = in.rotation_deg();
-  }
-  return p;
+  return engine::checked_pose(Vec3(in.translation().x_mm(), in.translation().y_mm(), in.translation().z_mm()),
+                              Vec3(in.rotation_axis().x_mm(), in.rotation_axis().y_mm(), in.rotation_axis().z_mm()),
+                              in.rotation_deg(), field);
 }
 
 void scene_to_proto(const SceneRecord& scene, pb::SceneInfo* out) {

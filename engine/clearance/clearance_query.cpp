@@ -39,6 +39,9 @@ Result<PosedSide> resolve(const ClearanceSide& in, const std::string& side, Part
   RigidTransform pose = in.pose;
   if (!in.object_id.empty() && !in.part_id.empty())
     return invalid_argument(side + ".part_id", "give a part at a pose or a scene object (scene_id, object_id), not both");
+  if (in.object_id.empty() && (!in.pose.is_rigid() || !in.pose.translation.allFinite() ||
+                               in.pose.translation.cwiseAbs().maxCoeff() > tolerances::kMaxCoordinateMm))
+    return invalid_argument(side + ".pose", "must be a finite rigid pose within 1e7 mm of the origin");
   if (!in.object_id.empty()) {
     auto scene = scenes.get(in.scene_id);
     if (!scene.ok()) return Error{scene.error().code, side + ".scene_id", scene.error().message};

@@ -104,7 +104,7 @@ Result<bool> check_cad_in_child(const std::string& path, const std::string& form
   }
   ::close(channel[0]);
   // A child killed or crashed never removed the link with the format's extension it made for the
-  // reader (server/part_registry): removed here, or refused uploads would pile up in tmp/.
+  // reader (engine/parts/part_registry): removed here, or refused uploads would pile up in tmp/.
   if (std::filesystem::path(path).extension() != "." + format) {
     std::error_code ec;
     std::filesystem::remove(path + "." + format, ec);

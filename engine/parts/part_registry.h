@@ -52,7 +52,7 @@ class PartRegistry {
                                        occt::Shape* shape = nullptr, std::vector<int>* face_of_triangle = nullptr,
                                        double* used_deflection_mm = nullptr);
   // The same without the child process (CAD files are otherwise read in a child first:
-  // server/cad_sandbox.h); the child itself reads with this.
+  // engine/parts/cad_sandbox.h); the child itself reads with this.
   static Result<TriangleMesh> read_in_process(const std::string& path, const std::string& format, double deflection_mm,
                                        occt::Shape* shape = nullptr, std::vector<int>* face_of_triangle = nullptr,
                                        double* used_deflection_mm = nullptr);
