@@ -175,7 +175,9 @@ TEST(EngineConcurrency, StepAnswersFromManyThreadsEqualTheAnswersComputedAlone) 
     });
   for (auto& t : threads) t.join();
   EXPECT_EQ(wrong.load(), 0);
-  EXPECT_GT(cached.load(), 0) << "the readers never found an answer in the cache";
+  // How often a reader found its answer depends on the threads' timing (the writers keep clearing
+  // the cache): recorded, not asserted. That a cached answer is found at all is tested below.
+  RecordProperty("answered_from_cache", cached.load());
 }
 
 // A question differing from a cached one in a single bit of one field is not answered from the
