@@ -72,22 +72,25 @@ Result<SceneRecord> Engine::create_scene(const std::string& name) {
   return scenes_.create(name);
 }
 
-Result<bool> Engine::check_object(const SceneObjectRecord& o, const std::string& field) const {
+Result<bool> Engine::check_object(SceneObjectRecord& o, const std::string& field, std::set<std::string>* known_parts) const {
   if (!o.id.empty())
     if (auto bad = check_id(o.id, field + ".object_id"); !bad.ok()) return bad;
   for (const auto& [text, name] : {std::pair<const std::string*, const char*>{&o.name, ".name"}, {&o.category, ".category"},
                                    {&o.group, ".group"}})
     if (auto bad = check_label(*text, field + name); !bad.ok()) return bad;
+  auto pose = checked_pose(o.pose.translation, o.pose.axis, o.pose.angle_deg, field + ".pose");
+  if (!pose.ok()) return pose.error();
+  o.pose = pose.value();  // as checked: the axis scaled to a largest component of 1
+  if (known_parts && known_parts->count(o.part_id)) return true;  // a batch looks each part up once
   auto part = parts_.store().get(o.part_id);
   if (!part.ok()) return Error{part.error().code, field + ".part_id", part.error().message};
+  if (known_parts) known_parts->insert(o.part_id);
   return true;
 }
 
 Result<PlacedMove> Engine::put_object(const std::string& scene_id, SceneObjectRecord object, double clearance_mm,
                                       const StopToken& stop) {
   if (auto bad = check_object(object, "object"); !bad.ok()) return bad.error();
-  if (auto bad = checked_pose(object.pose.translation, object.pose.axis, object.pose.angle_deg, "object.pose"); !bad.ok())
-    return bad.error();
   if (auto bad = check_clearance(clearance_mm); !bad.ok()) return bad.error();
   auto stored = scenes_.put(scene_id, std::move(object));
   if (!stored.ok()) return stored.error();
@@ -103,27 +106,19 @@ Result<std::vector<SceneObjectRecord>> Engine::put_objects(const std::string& sc
   std::set<std::string> known_parts, ids;
   for (std::size_t i = 0; i < objects.size(); ++i) {
     const std::string field = "objects[" + std::to_string(i) + "]";
-    const SceneObjectRecord& o = objects[i];
-    if (!o.id.empty()) {
-      if (auto bad = check_id(o.id, field + ".object_id"); !bad.ok()) return bad.error();
-      // Two objects of one batch under one id: one would silently replace the other.
-      if (!ids.insert(o.id).second) return invalid_argument(field + ".object_id", "'" + o.id + "' appears twice in the batch");
-    }
-    for (const auto& [text, name] : {std::pair<const std::string*, const char*>{&o.name, ".name"}, {&o.category, ".category"},
-                                     {&o.group, ".group"}})
-      if (auto bad = check_label(*text, field + name); !bad.ok()) return bad.error();
-    if (auto bad = checked_pose(o.pose.translation, o.pose.axis, o.pose.angle_deg, field + ".pose"); !bad.ok()) return bad.error();
-    if (known_parts.count(o.part_id)) continue;
-    auto part = parts_.store().get(o.part_id);
-    if (!part.ok()) return Error{part.error().code, field + ".part_id", part.error().message};
-    known_parts.insert(o.part_id);
+    if (auto bad = check_object(objects[i], field, &known_parts); !bad.ok()) return bad.error();
+    // Two objects of one batch under one id: one would silently replace the other.
+    if (!objects[i].id.empty() && !ids.insert(objects[i].id).second)
+      return invalid_argument(field + ".object_id", "'" + objects[i].id + "' appears twice in the batch");
   }
   return scenes_.put_many(scene_id, std::move(objects));
 }
 
-Result<MoveOutcome> Engine::move_object(const std::string& scene_id, const std::string& object_id, const StoredPose& pose,
+Result<MoveOutcome> Engine::move_object(const std::string& scene_id, const std::string& object_id, const StoredPose& asked_pose,
                                         double clearance_mm, DragSession* drag, const StopToken& stop) {
-  if (auto bad = checked_pose(pose.translation, pose.axis, pose.angle_deg, "pose"); !bad.ok()) return bad.error();
+  auto checked = checked_pose(asked_pose.translation, asked_pose.axis, asked_pose.angle_deg, "pose");
+  if (!checked.ok()) return checked.error();
+  const StoredPose& pose = checked.value();
   if (auto bad = check_clearance(clearance_mm); !bad.ok()) return bad.error();
   auto moved = scenes_.move(scene_id, object_id, pose);
   if (!moved.ok()) return moved.error();

@@ -17,6 +17,7 @@
 #include "kernel/core/stop_token.h"
 
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -66,6 +67,7 @@ class Engine {
                                 const StopToken& stop = {});
   // All or nothing: every object is checked (fields named objects[i]...) before any is stored.
   Result<std::vector<SceneObjectRecord>> put_objects(const std::string& scene_id, std::vector<SceneObjectRecord> objects);
+  // Poses are checked here (engine::checked_pose), whoever calls.
   // Stores the new pose, then answers the contacts (through the drag's session when there is one).
   Result<MoveOutcome> move_object(const std::string& scene_id, const std::string& object_id, const StoredPose& pose,
                                   double clearance_mm, DragSession* drag = nullptr, const StopToken& stop = {});
@@ -84,7 +86,10 @@ class Engine {
   void stop() { audits_.stop(); }
 
  private:
-  Result<bool> check_object(const SceneObjectRecord& object, const std::string& field) const;
+  // Id, labels, pose and part of an object (known_parts: parts a batch has already looked up).
+  // The pose is replaced by the checked one (its axis scaled).
+  Result<bool> check_object(SceneObjectRecord& object, const std::string& field,
+                            std::set<std::string>* known_parts = nullptr) const;
 
   MachineRegistry& machines_;
   PartRegistry& parts_;

@@ -29,10 +29,12 @@ PACKAGES=(
   libspdlog-dev libfmt-dev libsqlite3-dev nlohmann-json3-dev libcli11-dev libssl-dev
   # the access tests make their TLS certificates with the openssl command
   openssl
+  # scripts/check_container.sh lints the container's entrypoint and health check
+  shellcheck
   # machine model files
   libtomlplusplus-dev
   # python clients: grpcio/protobuf at run time; pip, setuptools and wheel install clients/python offline
-  python3 python3-grpcio python3-protobuf python3-pip python3-setuptools python3-wheel
+  python3 python3-grpcio python3-protobuf python3-pip python3-setuptools python3-wheel python3-venv
   # the audit report page: three.js from npm, checked in headless Chromium
   # (npm too: Debian packages it apart from nodejs; NodeSource's nodejs includes it and conflicts
   # with Debian's npm, so it is installed below only when the command is missing)

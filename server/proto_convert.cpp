@@ -1,7 +1,5 @@
 #include "server/proto_convert.h"
 
-#include "engine/input_checks.h"
-
 #include "kernel/core/tolerances.h"
 #include "kernel/core/units.h"
 
@@ -108,12 +106,6 @@ Result<engine::StepPart> to_step_part(const pb::SheetPart& in) {
   }
   for (const pb::Tab& t : in.tabs()) out.spec.tabs.push_back({t.x_min_mm(), t.x_max_mm(), t.y_mm(), t.height_mm()});
   return out;
-}
-
-Result<RigidTransform> to_pose(const pb::Pose& in, const std::string& field) {
-  auto pose = to_stored_pose(in, field);
-  if (!pose.ok()) return pose.error();
-  return pose.value().transform();
 }
 
 pb::Verdict to_proto(Verdict v) {
@@ -268,10 +260,12 @@ void to_proto(const p4::StepAnswer& a, pb::ValidateStepResponse* out) {
   t->set_total_us(a.times.total_us);
 }
 
-Result<StoredPose> to_stored_pose(const pb::Pose& in, const std::string& field) {
-  return engine::checked_pose(Vec3(in.translation().x_mm(), in.translation().y_mm(), in.translation().z_mm()),
-                              Vec3(in.rotation_axis().x_mm(), in.rotation_axis().y_mm(), in.rotation_axis().z_mm()),
-                              in.rotation_deg(), field);
+StoredPose to_stored_pose(const pb::Pose& in) {
+  StoredPose p;
+  p.translation = Vec3(in.translation().x_mm(), in.translation().y_mm(), in.translation().z_mm());
+  p.axis = Vec3(in.rotation_axis().x_mm(), in.rotation_axis().y_mm(), in.rotation_axis().z_mm());
+  p.angle_deg = in.rotation_deg();
+  return p;
 }
 
 void scene_to_proto(const SceneRecord& scene, pb::SceneInfo* out) {
@@ -296,9 +290,8 @@ Result<SceneRecord> scene_from_proto(const pb::SceneInfo& in) {
   out.name = in.name();
   for (int i = 0; i < in.objects_size(); ++i) {
     const pb::SceneObject& o = in.objects(i);
-    auto pose = to_stored_pose(o.pose(), "objects[" + std::to_string(i) + "].pose");
-    if (!pose.ok()) return pose.error();
-    out.objects[o.object_id()] = {o.object_id(), o.name(), o.category(), o.part_id(), pose.value(), o.group()};
+    // Checked when it was stored.
+    out.objects[o.object_id()] = {o.object_id(), o.name(), o.category(), o.part_id(), to_stored_pose(o.pose()), o.group()};
   }
   return out;
 }
@@ -359,14 +352,11 @@ pb::VolumeMethod to_proto(engine::SharedVolumeMethod m) {
 
 Result<engine::ClearanceRequest> to_clearance_request(const pb::ClearanceQueryRequest& in) {
   engine::ClearanceRequest out;
-  for (auto [side, from, name] : {std::tuple{&out.a, &in.a(), "a"}, std::tuple{&out.b, &in.b(), "b"}}) {
+  for (auto [side, from] : {std::pair{&out.a, &in.a()}, std::pair{&out.b, &in.b()}}) {
     side->part_id = from->part_id();
     side->scene_id = from->scene_id();
     side->object_id = from->object_id();
-    if (!from->object_id().empty()) continue;  // a scene object: its own pose
-    auto pose = to_pose(from->pose(), std::string(name) + ".pose");
-    if (!pose.ok()) return pose.error();
-    side->pose = pose.value();
+    side->pose = to_stored_pose(from->pose());  // checked by the engine, named "a.pose" / "b.pose"
   }
   out.safety_gap_mm = in.safety_gap_mm();
   out.region_merge_mm = in.region_merge_mm();

@@ -22,7 +22,6 @@ Result<engine::StepPart> to_step_part(const pb::SheetPart& part);
 // own takes the batch's (ValidateSteps).
 Result<engine::StepQuestion> to_question(const pb::ValidateStepRequest& request, const pb::SheetPart* default_part = nullptr,
                                          const std::string& default_machine = "");
-Result<RigidTransform> to_pose(const pb::Pose& pose, const std::string& field);
 
 void to_proto(const p4::StepAnswer& answer, pb::ValidateStepResponse* out);
 Result<engine::ClearanceRequest> to_clearance_request(const pb::ClearanceQueryRequest& in);
@@ -42,7 +41,8 @@ Verdict from_proto(pb::Verdict v);
 InconclusiveReason from_proto(pb::InconclusiveReason r);
 
 // Scenes: a pose as stored (axis and angle kept as given), and a scene both ways.
-Result<StoredPose> to_stored_pose(const pb::Pose& in, const std::string& field);
+// A pose as the client wrote it (the engine checks it: engine::checked_pose).
+StoredPose to_stored_pose(const pb::Pose& in);
 void scene_to_proto(const SceneRecord& scene, pb::SceneInfo* out);
 Result<SceneRecord> scene_from_proto(const pb::SceneInfo& in);
 

@@ -58,8 +58,8 @@ class DragReactor final : public grpc::ServerBidiReactor<pb::MoveObjectRequest, 
   DragSession session_;
 };
 
-SceneObjectRecord to_record(const pb::SceneObject& in, const StoredPose& pose) {
-  return {in.object_id(), in.name(), in.category(), in.part_id(), pose, in.group()};
+SceneObjectRecord to_record(const pb::SceneObject& in) {
+  return {in.object_id(), in.name(), in.category(), in.part_id(), to_stored_pose(in.pose()), in.group()};
 }
 
 // Streams an audit's progress until it ends; the job itself runs whether or not anyone watches.
@@ -151,9 +151,8 @@ grpc::ServerUnaryReactor* GatekeeperService::CreateScene(grpc::CallbackServerCon
 grpc::Status GatekeeperService::move(const pb::MoveObjectRequest& request, pb::MoveResult* response, DragSession* drag,
                                      const StopToken& stop) {
   const auto t0 = Clock::now();
-  auto pose = to_stored_pose(request.pose(), "pose");
-  if (!pose.ok()) return to_status(pose.error());
-  auto moved = engine_.move_object(request.scene_id(), request.object_id(), pose.value(), request.clearance_mm(), drag, stop);
+  auto moved = engine_.move_object(request.scene_id(), request.object_id(), to_stored_pose(request.pose()), request.clearance_mm(),
+                                   drag, stop);
   if (!moved.ok()) return to_status(moved.error());
   response->set_object_id(request.object_id());
   to_proto(moved.value(), response);
@@ -167,10 +166,8 @@ grpc::ServerUnaryReactor* GatekeeperService::PutObject(grpc::CallbackServerConte
                     [this, ctx](const pb::PutObjectRequest& put, pb::MoveResult* out) -> grpc::Status {
     const auto t0 = Clock::now();
     if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
-    auto pose = to_stored_pose(put.object().pose(), "object.pose");
-    if (!pose.ok()) return to_status(pose.error());
     const StopToken stop([ctx] { return ctx->IsCancelled() || past_deadline(ctx); });
-    auto placed = engine_.put_object(put.scene_id(), to_record(put.object(), pose.value()), put.clearance_mm(), stop);
+    auto placed = engine_.put_object(put.scene_id(), to_record(put.object()), put.clearance_mm(), stop);
     if (!placed.ok()) return to_status(placed.error());
     out->set_object_id(placed.value().object_id);
     to_proto(placed.value().outcome, out);
@@ -185,11 +182,7 @@ grpc::ServerUnaryReactor* GatekeeperService::PutObjects(grpc::CallbackServerCont
                     [this, ctx](const pb::PutObjectsRequest& put, pb::PutObjectsResponse* out) -> grpc::Status {
     if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
     std::vector<SceneObjectRecord> objects;
-    for (int i = 0; i < put.objects_size(); ++i) {
-      auto pose = to_stored_pose(put.objects(i).pose(), "objects[" + std::to_string(i) + "].pose");
-      if (!pose.ok()) return grpc::Status(to_status(pose.error()));
-      objects.push_back(to_record(put.objects(i), pose.value()));
-    }
+    for (const pb::SceneObject& o : put.objects()) objects.push_back(to_record(o));
     // All or nothing: a bad object leaves the scene as it was.
     auto stored = engine_.put_objects(put.scene_id(), std::move(objects));
     if (!stored.ok()) return grpc::Status(to_status(stored.error()));

@@ -112,6 +112,15 @@ std::optional<Error> validate(const std::vector<AuditObject>& objects, const Aud
     return invalid_argument("clearance_mm", "must be a finite, non-negative distance");
   if (!std::isfinite(options.tile_mm) || options.tile_mm < 0.0) return invalid_argument("tile_mm", "must be finite and >= 0");
   if (options.threads < 1 || options.threads > 256) return invalid_argument("threads", "must be in [1, 256]");
+  if (auto bad = check_objects(objects); !bad.ok()) return bad.error();
+  for (std::uint32_t id : options.only_objects)
+    if (id >= objects.size()) return invalid_argument("only_objects", "no object " + std::to_string(id));
+  return std::nullopt;
+}
+
+}  // namespace
+
+Result<bool> check_objects(const std::vector<AuditObject>& objects) {
   for (std::size_t i = 0; i < objects.size(); ++i) {
     const std::string field = "objects[" + std::to_string(i) + "]";
     if (!objects[i].mesh) return invalid_argument(field + ".mesh", "is missing");
@@ -119,12 +128,8 @@ std::optional<Error> validate(const std::vector<AuditObject>& objects, const Aud
     if (!(objects[i].surface_deviation_mm >= 0.0 && objects[i].surface_deviation_mm <= 1000.0))
       return invalid_argument(field + ".surface_deviation_mm", "must be in [0, 1000] mm");
   }
-  for (std::uint32_t id : options.only_objects)
-    if (id >= objects.size()) return invalid_argument("only_objects", "no object " + std::to_string(id));
-  return std::nullopt;
+  return true;
 }
-
-}  // namespace
 
 int matching_rule(const std::vector<ContactRule>& rules, const AuditObject& a, const AuditObject& b) {
   for (std::size_t i = 0; i < rules.size(); ++i) {

@@ -38,6 +38,10 @@ struct AuditObject {
   double surface_deviation_mm = 0.0;
 };
 
+// Every object has a mesh, a finite rigid pose and a surface deviation in [0, 1000] mm; an error
+// names objects[i] and the field otherwise (the audit's and the layout session's check).
+Result<bool> check_objects(const std::vector<AuditObject>& objects);
+
 // An intended contact (seed 004 §6: parts bolted together, pins in holes): matching pairs are left
 // out of the narrow phase and counted as excluded.
 struct ContactRule {

@@ -1,5 +1,7 @@
 #include "engine/clearance/clearance_query.h"
 
+#include "engine/input_checks.h"
+
 #include "engine/verdicts/exact_depth.h"
 #include "engine/verdicts/number_text.h"
 #include "engine/verdicts/pair_verdict.h"
@@ -36,12 +38,14 @@ struct PosedSide {
 // A side is an uploaded part at a pose, or a scene object (its part at its pose).
 Result<PosedSide> resolve(const ClearanceSide& in, const std::string& side, PartRegistry& parts, SceneStore& scenes) {
   std::string part_id = in.part_id;
-  RigidTransform pose = in.pose;
   if (!in.object_id.empty() && !in.part_id.empty())
     return invalid_argument(side + ".part_id", "give a part at a pose or a scene object (scene_id, object_id), not both");
-  if (in.object_id.empty() && (!in.pose.is_rigid() || !in.pose.translation.allFinite() ||
-                               in.pose.translation.cwiseAbs().maxCoeff() > tolerances::kMaxCoordinateMm))
-    return invalid_argument(side + ".pose", "must be a finite rigid pose within 1e7 mm of the origin");
+  RigidTransform pose;
+  if (in.object_id.empty()) {
+    auto checked = checked_pose(in.pose.translation, in.pose.axis, in.pose.angle_deg, side + ".pose");
+    if (!checked.ok()) return checked.error();
+    pose = checked.value().transform();
+  }
   if (!in.object_id.empty()) {
     auto scene = scenes.get(in.scene_id);
     if (!scene.ok()) return Error{scene.error().code, side + ".scene_id", scene.error().message};

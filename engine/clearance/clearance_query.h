@@ -19,7 +19,7 @@ namespace gk::engine {
 // One side: an uploaded part at a pose, or (object_id set) a scene object, its part at its pose.
 struct ClearanceSide {
   std::string part_id;
-  RigidTransform pose;
+  StoredPose pose;  // checked here (engine::checked_pose)
   std::string scene_id, object_id;
 };
 

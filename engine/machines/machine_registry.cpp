@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -49,6 +50,19 @@ Result<MachineSnapshot> MachineRegistry::get(const std::string& id) const {
   auto it = machines_.find(resolve(id));
   if (it == machines_.end()) return Error{ErrorCode::kNotFound, "machine_id", "no machine '" + id + "'"};
   return it->second.snapshot;
+}
+
+Result<MachineVersion> MachineRegistry::current(const std::string& id) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto it = machines_.find(resolve(id));
+  if (it == machines_.end()) return Error{ErrorCode::kNotFound, "machine_id", "no machine '" + id + "'"};
+  const MachineSnapshot& m = it->second.snapshot;
+  return MachineVersion{m.id, m.version, m.state};
+}
+
+std::uint64_t MachineRegistry::next_instance() {
+  static std::atomic<std::uint64_t> counter{0};
+  return ++counter;
 }
 
 Result<bool> MachineRegistry::set_state(const std::string& id, const p4::MachineState& state) {
@@ -100,17 +114,25 @@ Result<MachineSnapshot> MachineRegistry::install(const std::string& id, const st
 }
 
 Result<p4::StepValidator*> MachineRegistry::validator(const std::string& id, const p4::MachineState* state) {
-  auto snapshot = get(id);
-  if (!snapshot.ok()) return snapshot.error();
-  // One validator per (thread, registry, machine): built on the thread's first request.
+  auto machine = current(id);
+  if (!machine.ok()) return machine.error();
+  // One validator per (thread, registry, machine, model version): built on the thread's first
+  // request, the model copied only then.
   struct Local {
     std::unique_ptr<p4::StepValidator> validator;
   };
   thread_local std::unordered_map<std::string, Local> locals;
-  const std::string key = std::to_string(reinterpret_cast<std::uintptr_t>(this)) + "/" + snapshot.value().id + "/" +
-                          std::to_string(snapshot.value().version);
+  const std::string key = std::to_string(instance_) + "/" + machine.value().id + "/" + std::to_string(machine.value().version);
   Local& local = locals[key];
   if (!local.validator) {
+    auto snapshot = get(id);
+    if (!snapshot.ok()) return snapshot.error();
+    // A model replaced since current(): start again with the newer one (never file its validator
+    // under the older version).
+    if (snapshot.value().version != machine.value().version) {
+      locals.erase(key);
+      return validator(id, state);
+    }
     auto scene = p4::MachineScene::build(snapshot.value().model);
     if (!scene.ok()) return scene.error();
     // Answers are cached once, for every thread, by the engine (engine/steps/step_answers).
@@ -118,7 +140,7 @@ Result<p4::StepValidator*> MachineRegistry::validator(const std::string& id, con
     options.memoize_answers = false;
     local.validator = std::make_unique<p4::StepValidator>(scene.value(), options);
   }
-  const p4::MachineState& wanted = state ? *state : snapshot.value().state;
+  const p4::MachineState& wanted = state ? *state : machine.value().state;
   if (local.validator->scene().state() != wanted) {
     auto applied = local.validator->set_state(wanted);
     if (!applied.ok()) return applied.error();

@@ -21,6 +21,13 @@ struct MachineSnapshot {
   unsigned long long version = 0;  // bumps when the model is replaced
 };
 
+// What identifies a machine's answers: its id, model version and current state (no model copy).
+struct MachineVersion {
+  std::string id;
+  unsigned long long version = 0;
+  p4::MachineState state;
+};
+
 class MachineRegistry {
  public:
   static constexpr const char* kDefaultMachine = "p4-default";
@@ -31,6 +38,8 @@ class MachineRegistry {
 
   std::vector<MachineSnapshot> list() const;
   Result<MachineSnapshot> get(const std::string& id) const;  // "" means the default
+  // The same without copying the model: what a cache lookup needs.
+  Result<MachineVersion> current(const std::string& id) const;
   Result<bool> set_state(const std::string& id, const p4::MachineState& state);
   // Adds or replaces a machine from its model file, acknowledged once the file is on disk (written
   // to a temporary file, fsync'd, renamed); the state resets to all segments engaged.
@@ -48,6 +57,10 @@ class MachineRegistry {
   Result<MachineSnapshot> install(const std::string& id, const std::string& model_toml);
 
   std::string models_dir_;
+  // Names this registry's validators in each thread's table (an address could be reused by a later
+  // registry whose machine has the same id and version but another model).
+  const std::uint64_t instance_ = next_instance();
+  static std::uint64_t next_instance();
 
   mutable std::mutex mutex_;
   std::map<std::string, Machine> machines_;

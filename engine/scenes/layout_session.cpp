@@ -51,13 +51,7 @@ Result<std::unique_ptr<LayoutSession>> LayoutSession::create(std::vector<AuditOb
                                                              double clearance_mm) {
   if (moving >= objects.size()) return invalid_argument("moving", "no object " + std::to_string(moving));
   if (!std::isfinite(clearance_mm) || clearance_mm < 0.0) return invalid_argument("clearance_mm", "must be a finite, non-negative distance");
-  for (std::size_t i = 0; i < objects.size(); ++i) {
-    const std::string field = "objects[" + std::to_string(i) + "]";
-    if (!objects[i].mesh) return invalid_argument(field + ".mesh", "is missing");
-    if (!objects[i].pose.is_finite() || !objects[i].pose.is_rigid()) return invalid_argument(field + ".pose", "must be a finite rigid transform");
-    if (!(objects[i].surface_deviation_mm >= 0.0 && objects[i].surface_deviation_mm <= 1000.0))
-      return invalid_argument(field + ".surface_deviation_mm", "must be in [0, 1000] mm");
-  }
+  if (auto bad = check_objects(objects); !bad.ok()) return bad.error();
   std::unique_ptr<LayoutSession> s(new LayoutSession());
   s->objects_ = std::move(objects);
   s->moving_ = moving;

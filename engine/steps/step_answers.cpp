@@ -42,7 +42,7 @@ void add_state(ExactKey& k, const p4::MachineState& s) {
 
 }  // namespace
 
-Result<std::string> StepAnswers::key_of(const StepQuestion& q, const MachineSnapshot& machine) const {
+std::string StepAnswers::key_of(const StepQuestion& q, const MachineVersion& machine) {
   ExactKey k;
   k.add(machine.id).add(machine.version).add(q.with_corrections);
   const p4::SheetPartSpec& p = q.part.spec;
@@ -74,20 +74,21 @@ std::optional<StepReply> StepAnswers::lookup(const std::string& key, Clock::time
 
 std::optional<StepReply> StepAnswers::cached(const StepQuestion& question) const {
   const auto t0 = Clock::now();
-  auto machine = machines_.get(question.machine_id);
+  auto machine = machines_.current(question.machine_id);
   if (!machine.ok()) return std::nullopt;
-  auto key = key_of(question, machine.value());
-  if (!key.ok()) return std::nullopt;
-  return lookup(key.value(), t0);
+  return lookup(key_of(question, machine.value()), t0);
 }
 
 Result<StepReply> StepAnswers::validate(const StepQuestion& q) {
   const auto t0 = Clock::now();
+  auto current = machines_.current(q.machine_id);
+  if (!current.ok()) return Error{current.error().code, "machine_id", current.error().message};
+  const MachineVersion& asked = current.value();
+  const std::string key = key_of(q, asked);
+  if (auto hit = lookup(key, t0)) return *hit;
+  // A miss: the model is read for the checks (an answer of a model replaced meanwhile is not kept).
   auto machine = machines_.get(q.machine_id);
   if (!machine.ok()) return Error{machine.error().code, "machine_id", machine.error().message};
-  auto key = key_of(q, machine.value());
-  if (!key.ok()) return key.error();
-  if (auto hit = lookup(key.value(), t0)) return *hit;
   if (!(q.part.deflection_mm >= 0.0) || !(q.part.deflection_mm <= 1000.0))
     return invalid_argument("part.deflection_mm", "must be in [0, 1000] mm (0: the default)");
   Result<p4::SheetPart> part = Error{};
@@ -108,8 +109,8 @@ Result<StepReply> StepAnswers::validate(const StepQuestion& q) {
   // The state the key was made with, never the machine's state read again: a SetMachineState
   // between the two reads would store this state's answer under the other's key (a false CLEAR
   // once the machine is back in that state).
-  const p4::MachineState& state = q.state ? *q.state : machine.value().state;
-  auto validator = machines_.validator(machine.value().id, &state);
+  const p4::MachineState& state = q.state ? *q.state : asked.state;
+  auto validator = machines_.validator(asked.id, &state);
   if (!validator.ok()) return validator.error();
   auto answer = validator.value()->validate(part.value(), q.step, q.with_corrections);
   if (!answer.ok()) {
@@ -119,11 +120,11 @@ Result<StepReply> StepAnswers::validate(const StepQuestion& q) {
     return e;
   }
   // A model replaced meanwhile: the answer is this caller's, not the old version's to keep.
-  auto now = machines_.get(q.machine_id);
-  if (!now.ok() || now.value().version != machine.value().version) return StepReply{std::move(answer).value(), false};
+  auto now = machines_.current(q.machine_id);
+  if (!now.ok() || now.value().version != asked.version) return StepReply{std::move(answer).value(), false};
   std::lock_guard<std::mutex> lock(mutex_);
   if (answers_.size() >= capacity_) answers_.clear();  // simple and bounded; a miss only costs time
-  answers_[key.value()] = answer.value();
+  answers_[key] = answer.value();
   return StepReply{std::move(answer).value(), false};
 }
 

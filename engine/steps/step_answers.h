@@ -49,7 +49,7 @@ class StepAnswers {
   Result<StepReply> validate(const StepQuestion& question);
 
  private:
-  Result<std::string> key_of(const StepQuestion& question, const MachineSnapshot& machine) const;
+  static std::string key_of(const StepQuestion& question, const MachineVersion& machine);
   std::optional<StepReply> lookup(const std::string& key, std::chrono::steady_clock::time_point t0) const;
 
   MachineRegistry& machines_;

@@ -5,7 +5,5 @@
 namespace gk {
 
 inline constexpr double kPi = 3.14159265358979323846;
-inline constexpr double kDegreesPerRadian = 180.0 / kPi;
-inline constexpr double kRadiansPerDegree = kPi / 180.0;
 
 }  // namespace gk
