@@ -19,13 +19,18 @@
 #
 # The paths can be moved for tests outside a container: GATEKEEPER_CONFIG_DIR (/etc/gatekeeper),
 # GATEKEEPER_DATA_DIR (/data), GATEKEEPER_PORT (50051), GATEKEEPER_PORT_FILE
-# (/tmp/gatekeeperd.port, read by the health check) and GATEKEEPERD (gatekeeperd).
+# (/tmp/gatekeeperd.port, read by the health check), GATEKEEPER_METRICS_PORT (9464: GET /metrics
+# on the container's loopback, for a scraper sharing its network namespace; 0: any free port;
+# "off": none), GATEKEEPER_METRICS_PORT_FILE (/tmp/gatekeeperd.metrics-port) and GATEKEEPERD
+# (gatekeeperd).
 set -euo pipefail
 
 conf="${GATEKEEPER_CONFIG_DIR:-/etc/gatekeeper}"
 data="${GATEKEEPER_DATA_DIR:-/data}"
 port="${GATEKEEPER_PORT:-50051}"
 port_file="${GATEKEEPER_PORT_FILE:-/tmp/gatekeeperd.port}"
+metrics_port="${GATEKEEPER_METRICS_PORT:-9464}"
+metrics_port_file="${GATEKEEPER_METRICS_PORT_FILE:-/tmp/gatekeeperd.metrics-port}"
 daemon="${GATEKEEPERD:-gatekeeperd}"
 
 if [ $# -gt 0 ] && [ "${1#-}" = "$1" ]; then
@@ -47,6 +52,11 @@ user_args=("$@")
 # The health check reads the port once gatekeeperd has bound it; never a stale one.
 rm -f "$port_file"
 default --port-file "$port_file"
+if [ "$metrics_port" != "off" ] && ! given --config && ! given --metrics-listen; then
+  rm -f "$metrics_port_file"
+  default --metrics-listen "127.0.0.1:$metrics_port"
+  default --metrics-port-file "$metrics_port_file"
+fi
 
 if given --config; then
   say "--config given: listen, data_dir and TLS come from it (and from the flags given)"

@@ -97,7 +97,7 @@ Result<PlacedMove> Engine::put_object(const std::string& scene_id, SceneObjectRe
   // Stored once; then the new object's contacts, as a move would answer them.
   auto scene = scenes_.get(scene_id);
   if (!scene.ok()) return scene.error();
-  auto outcome = object_contacts(scene.value(), stored.value().id, clearance_mm, parts_, stop);
+  auto outcome = DragSession::once(scene.value(), stored.value().id, clearance_mm, parts_, stop);
   if (!outcome.ok()) return outcome.error();
   return PlacedMove{stored.value().id, std::move(outcome).value()};
 }
@@ -126,11 +126,11 @@ Result<MoveOutcome> Engine::move_object(const std::string& scene_id, const std::
     auto version = scenes_.version(scene_id);
     if (!version.ok()) return version.error();
     return drag->move(scene_id, version.value(), [&] { return scenes_.get(scene_id); }, object_id, clearance_mm,
-                      pose.transform(), parts_);
+                      pose.transform(), parts_, stop);
   }
   auto scene = scenes_.get(scene_id);
   if (!scene.ok()) return scene.error();
-  return object_contacts(scene.value(), object_id, clearance_mm, parts_, stop);
+  return DragSession::once(scene.value(), object_id, clearance_mm, parts_, stop);
 }
 
 Result<SceneRecord> Engine::delete_object(const std::string& scene_id, const std::string& object_id) {

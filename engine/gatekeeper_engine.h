@@ -11,7 +11,6 @@
 #include "engine/parts/part_registry.h"
 #include "engine/parts/part_store.h"
 #include "engine/scenes/drag_session.h"
-#include "engine/scenes/object_contacts.h"
 #include "engine/scenes/scene_store.h"
 #include "engine/steps/step_answers.h"
 #include "kernel/core/stop_token.h"

@@ -30,6 +30,14 @@ class WorkPool {
     return true;
   }
 
+  // Jobs waiting for a worker (not those running), the most that may wait, and the workers.
+  std::size_t queued() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return queue_.size();
+  }
+  std::size_t capacity() const { return max_queued_; }
+  std::size_t threads() const { return workers_.size(); }
+
   // Finishes the queued work, then joins the workers.
   void stop() {
     {
@@ -57,7 +65,7 @@ class WorkPool {
   }
 
   std::size_t max_queued_;
-  std::mutex mutex_;
+  mutable std::mutex mutex_;
   std::condition_variable ready_;
   std::deque<std::function<void()>> queue_;
   bool stopping_ = false;

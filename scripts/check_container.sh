@@ -417,7 +417,8 @@ else
     chmod 0600 "$root/conf"/* 2> /dev/null || true
     chown -R "$owner_id:$owner_id" "$root"
     local env=(env "PATH=$work/bin:/usr/bin:/bin" "GATEKEEPER_CONFIG_DIR=$root/conf" "GATEKEEPER_DATA_DIR=$root/data"
-      "GATEKEEPER_PORT=0" "GATEKEEPER_PORT_FILE=$root/tmp/port" "GATEKEEPER_TLS_SERVER_NAME=gatekeeper.test")
+      "GATEKEEPER_PORT=0" "GATEKEEPER_PORT_FILE=$root/tmp/port" "GATEKEEPER_TLS_SERVER_NAME=gatekeeper.test"
+      "GATEKEEPER_METRICS_PORT=0" "GATEKEEPER_METRICS_PORT_FILE=$root/tmp/metrics-port")
     "${as_user[@]}" "${env[@]}" gatekeeper-entrypoint --drain-seconds 1 --log-level warn "$@" > "$root/log" 2>&1 &
     daemon_pid=$!
     for i in $(seq 1 150); do
@@ -449,6 +450,14 @@ else
     fi
     rc=0
     hc="$("${as_user[@]}" "${env[@]}" gatekeeper-healthcheck 2>&1)" || rc=$?
+    # /metrics on the container's loopback, from the port the entrypoint asked for.
+    if [ -s "$root/tmp/metrics-port" ] &&
+      python3 -c 'import sys, urllib.request; sys.exit(0 if b"gatekeeper_rpc_calls_total" in urllib.request.urlopen(sys.argv[1], timeout=10).read() else 1)' \
+        "http://127.0.0.1:$(cat "$root/tmp/metrics-port")/metrics"; then
+      hc="$hc; /metrics served"
+    else
+      fail "$name: no /metrics on the container's loopback"
+    fi
     if [ $rc -eq 0 ]; then
       ok "$name: $(head -1 "$root/log" | sed 's/^gatekeeper-entrypoint: //'); $hc"
     else

@@ -23,7 +23,7 @@ constexpr std::size_t kMaxChunkBytes = 1u << 20;
 class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> {
  public:
   UploadReactor(GatekeeperService& service, grpc::CallbackServerContext* ctx, pb::PartInfo* reply)
-      : service_(service), ctx_(ctx), reply_(reply), t0_(Clock::now()) {
+      : service_(service), ctx_(ctx), reply_(reply), call_(begin_call(ctx, "UploadPart")) {
     slot_ = service_.upload_slots().open(ctx_);
     if (slot_ == 0) {
       done({grpc::StatusCode::RESOURCE_EXHAUSTED, "too many uploads open at once: retry later"});
@@ -33,7 +33,7 @@ class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> 
   }
 
   void OnReadDone(bool ok) override {
-    const grpc::Status read = guarded_status("UploadPart", [&] {
+    const grpc::Status read = guarded_status(call_, [&] {
       on_read(ok);
       return grpc::Status::OK;
     });
@@ -75,7 +75,7 @@ class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> 
   }
 
   void done(const grpc::Status& status) {
-    service_.stats().record("UploadPart", us_since(t0_), !status.ok());
+    end_call(service_.stats(), call_, status, nullptr);
     Finish(status);
   }
 
@@ -89,7 +89,7 @@ class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> 
     // that a file that keeps the reader busy never holds up mesh uploads.
     WorkPool& pool = engine::is_cad_format(upload_->format()) ? service_.cad_upload_pool() : service_.upload_pool();
     const bool queued = pool.try_submit([self] {
-      const grpc::Status status = guarded_status("UploadPart", [&]() -> grpc::Status {
+      const grpc::Status status = guarded_status(self->call_, [&]() -> grpc::Status {
         return self->finish_upload();
       });
       self->done(status);
@@ -109,7 +109,7 @@ class UploadReactor final : public grpc::ServerReadReactor<pb::UploadPartChunk> 
   grpc::CallbackServerContext* ctx_;
   std::uint64_t slot_ = 0;
   pb::PartInfo* reply_;
-  Clock::time_point t0_;
+  const Call call_;
   pb::UploadPartChunk chunk_;
   std::unique_ptr<PartUpload> upload_;
 };
@@ -146,7 +146,7 @@ grpc::Status GatekeeperService::validate_one(const pb::ValidateStepRequest& requ
 grpc::ServerUnaryReactor* GatekeeperService::ValidateStep(grpc::CallbackServerContext* ctx,
                                                           const pb::ValidateStepRequest* request,
                                                           pb::ValidateStepResponse* response) {
-  const auto t0 = Clock::now();
+  const Call call = begin_call(ctx, "ValidateStep");
   // A repeated question is answered here, on the callback thread, from the engine's cache (any
   // trouble, even an exception, leaves it to a worker, which answers the error).
   const bool answered = [&] {
@@ -162,8 +162,8 @@ grpc::ServerUnaryReactor* GatekeeperService::ValidateStep(grpc::CallbackServerCo
       return false;
     }
   }();
-  if (answered) return finish(ctx, stats_, "ValidateStep", t0, grpc::Status::OK);
-  return run_queued(request->part().part_id().empty() ? validation_pool_ : part_validation_pool_, stats_, ctx, "ValidateStep",
+  if (answered) return finish(ctx, stats_, call, grpc::Status::OK, response);
+  return run_queued(request->part().part_id().empty() ? validation_pool_ : part_validation_pool_, stats_, ctx, call,
                     request, response, [this](const pb::ValidateStepRequest& r, pb::ValidateStepResponse* out) {
                       return validate_one(r, nullptr, "", out);
                     });
@@ -196,15 +196,15 @@ grpc::ServerUnaryReactor* GatekeeperService::ValidateSteps(grpc::CallbackServerC
 grpc::ServerUnaryReactor* GatekeeperService::ClearanceQuery(grpc::CallbackServerContext* ctx,
                                                             const pb::ClearanceQueryRequest* request,
                                                             pb::ClearanceQueryResponse* response) {
-  const auto t0 = Clock::now();
+  const Call call = begin_call(ctx, "ClearanceQuery");
   auto* reactor = ctx->DefaultReactor();
-  const bool queued = pool_.try_submit([this, ctx, request, response, reactor, t0] {
+  const bool queued = pool_.try_submit([this, ctx, request, response, reactor, call] {
     grpc::Status status;
     if (ctx->IsCancelled()) status = {grpc::StatusCode::CANCELLED, "cancelled by the client"};
     else if (past_deadline(ctx)) status = {grpc::StatusCode::DEADLINE_EXCEEDED, "deadline passed while queued"};
     else {
       const StopToken stop([ctx] { return ctx->IsCancelled() || past_deadline(ctx); });
-      status = guarded_status("ClearanceQuery", [&]() -> grpc::Status {
+      status = guarded_status(call, [&]() -> grpc::Status {
         auto asked = to_clearance_request(*request);
         if (!asked.ok()) return to_status(asked.error());
         auto answer = engine_.clearance(asked.value(), stop);
@@ -213,12 +213,13 @@ grpc::ServerUnaryReactor* GatekeeperService::ClearanceQuery(grpc::CallbackServer
         return grpc::Status::OK;
       });
     }
-    stats_.record("ClearanceQuery", us_since(t0), !status.ok());
+    end_call(stats_, call, status, response);
     reactor->Finish(status);
   });
   if (!queued) {
-    stats_.record("ClearanceQuery", us_since(t0), true);
-    reactor->Finish({grpc::StatusCode::RESOURCE_EXHAUSTED, "clearance queue full: retry later"});
+    const grpc::Status refused{grpc::StatusCode::RESOURCE_EXHAUSTED, "clearance queue full: retry later"};
+    end_call(stats_, call, refused);
+    reactor->Finish(refused);
   }
   return reactor;
 }
@@ -226,7 +227,7 @@ grpc::ServerUnaryReactor* GatekeeperService::ClearanceQuery(grpc::CallbackServer
 grpc::ServerReadReactor<pb::UploadPartChunk>* GatekeeperService::UploadPart(grpc::CallbackServerContext* ctx,
                                                                            pb::PartInfo* response) {
   if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) {
-    stats_.record("UploadPart", 0.0, true);
+    end_call(stats_, begin_call(ctx, "UploadPart"), allowed);
     return new RefusedStream<grpc::ServerReadReactor<pb::UploadPartChunk>>(allowed);
   }
   return new UploadReactor(*this, ctx, response);
@@ -307,7 +308,9 @@ grpc::ServerUnaryReactor* GatekeeperService::GetServerInfo(grpc::CallbackServerC
       r->set_p50_us(s.p50_us);
       r->set_p99_us(s.p99_us);
       for (std::size_t b = 0; b < RpcStats::kBuckets; ++b) {
-        r->add_histogram_bounds_us(static_cast<double>(1ull << b));
+        // The last bucket has no bound.
+        r->add_histogram_bounds_us(b < RpcStats::kBounded ? RpcStats::bucket_bound_us(b)
+                                                          : std::numeric_limits<double>::infinity());
         r->add_histogram_counts(s.histogram[b]);
       }
     }
@@ -319,6 +322,27 @@ grpc::ServerUnaryReactor* GatekeeperService::GetServerInfo(grpc::CallbackServerC
     response->set_audits_in_memory(engine_.audits().in_memory());
     return grpc::Status(grpc::Status::OK);
   });
+}
+
+MetricsSnapshot GatekeeperService::metrics() {
+  MetricsSnapshot m;
+  m.rpcs = stats_.summaries();
+  const auto pool = [&](const char* name, const WorkPool& p) { m.pools.push_back({name, p.queued(), p.capacity(), p.threads()}); };
+  pool("validation", validation_pool_);
+  pool("part_validation", part_validation_pool_);
+  pool("scene", scene_pool_);
+  pool("record", record_pool_);
+  pool("clearance", pool_);
+  pool("upload", upload_pool_);
+  pool("cad_upload", cad_upload_pool_);
+  m.step_cache = engine_.steps().cache_stats();
+  m.parts = engine_.part_memory();
+  m.parts_stored = engine_.parts_stored();
+  m.audits_running = engine_.audits().running();
+  m.audits_in_memory = engine_.audits().in_memory();
+  m.uploads_open = upload_slots_.open_count();
+  m.process = read_process_memory();
+  return m;
 }
 
 }  // namespace gk::server

@@ -10,6 +10,7 @@
 #include "engine/work_pool.h"
 #include "kernel/core/stop_token.h"
 #include "server/engine_names.h"
+#include "server/metrics_text.h"
 #include "server/rpc_stats.h"
 #include "server/upload_slots.h"
 
@@ -58,6 +59,8 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
     cad_upload_pool_.stop();
   }
   RpcStats& stats() { return stats_; }
+  // What /metrics reports (server/metrics_endpoint.h): calls, queues, caches, memory.
+  MetricsSnapshot metrics();
   Engine& engine() { return engine_; }
   WorkPool& upload_pool() { return upload_pool_; }
   WorkPool& cad_upload_pool() { return cad_upload_pool_; }

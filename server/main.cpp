@@ -1,7 +1,8 @@
 // gatekeeperd: the physics gatekeeper's gRPC daemon.
 //
 //   gatekeeperd [--listen 127.0.0.1:50051] [--data-dir DIR] [--config FILE.toml] [--workers N]
-//               [--queue N] [--audit-jobs N] [--port-file FILE] [--log-level info]
+//               [--queue N] [--audit-jobs N] [--port-file FILE] [--log-level info] [--log-format text|json]
+//               [--log-file FILE] [--log-calls true|false] [--metrics-listen 127.0.0.1:9464 [--metrics-port-file FILE]]
 //               [--tls-cert PEM --tls-key PEM [--tls-client-ca PEM]] [--token-file FILE]
 //               [--part-memory-gb 8] [--audits-in-memory 16] [--cad-check-seconds 120] [--cad-check-memory-gb 8]
 //
@@ -9,6 +10,11 @@
 // writes is private to its user: the data directory 0700, files 0600 (umask 077). CAD files are
 // first read in a child process, this program run as `gatekeeperd --check-cad ...`
 // (engine/parts/cad_sandbox.h): a reader that crashes on a malformed file takes only the child down.
+//
+// Logs go to standard error (or --log-file) as text or one JSON object per line, with one line per
+// answered call: its request id (the client's x-request-id or a new one, echoed back), method,
+// status, latency, and the verdict and deciding stage where the answer has them. With
+// --metrics-listen, GET /metrics serves Prometheus text on that loopback address.
 //
 // Starts with the embedded default P4 machine model; health (grpc.health.v1) and reflection
 // (v1alpha) are served; SIGTERM or SIGINT shut it down gracefully (health NOT_SERVING, in-flight
@@ -18,6 +24,8 @@
 #include "server/access_control.h"
 #include "server/audit_archive.h"
 #include "server/gatekeeper_service.h"
+#include "server/metrics_endpoint.h"
+#include "server/request_log.h"
 
 #include <CLI/CLI.hpp>
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
@@ -40,6 +48,11 @@ struct Config {
   std::string data_dir = "gatekeeper-data";
   std::string port_file;
   std::string log_level = "info";
+  std::string log_format = "text";
+  std::string log_file;
+  bool log_calls = true;
+  std::string metrics_listen;  // empty: no /metrics
+  std::string metrics_port_file;
   int workers = 2;
   int queue = 64;
   int audit_jobs = 1;
@@ -68,6 +81,10 @@ bool apply_config_file(const std::string& path, Config& c, const CLI::App& app) 
     if (app.count("--queue") == 0) c.queue = t["queue"].value_or(c.queue);
     if (app.count("--audit-jobs") == 0) c.audit_jobs = t["audit_jobs"].value_or(c.audit_jobs);
     if (app.count("--log-level") == 0) c.log_level = t["log_level"].value_or(c.log_level);
+    if (app.count("--log-format") == 0) c.log_format = t["log_format"].value_or(c.log_format);
+    if (app.count("--log-file") == 0) c.log_file = t["log_file"].value_or(c.log_file);
+    if (app.count("--log-calls") == 0) c.log_calls = t["log_calls"].value_or(c.log_calls);
+    if (app.count("--metrics-listen") == 0) c.metrics_listen = t["metrics_listen"].value_or(c.metrics_listen);
     if (app.count("--part-memory-gb") == 0) c.part_memory_gb = t["part_memory_gb"].value_or(c.part_memory_gb);
     if (app.count("--tls-cert") == 0) c.access.tls_cert_file = t["tls_cert"].value_or(c.access.tls_cert_file);
     if (app.count("--tls-key") == 0) c.access.tls_key_file = t["tls_key"].value_or(c.access.tls_key_file);
@@ -89,7 +106,9 @@ int main(int argc, char** argv) {
   CLI::App app{"gatekeeperd: decides, before a machine moves, whether the move is physically possible"};
   app.add_option("--listen", config.listen, "address:port to listen on (port 0: any free port)");
   app.add_option("--data-dir", config.data_dir, "where uploaded parts and their records are stored");
-  app.add_option("--config", config_file, "a TOML file with listen, data_dir, workers, queue, audit_jobs, log_level, part_memory_gb");
+  app.add_option("--config", config_file,
+                 "a TOML file with listen, data_dir, workers, queue, audit_jobs, log_level, log_format, log_file, "
+                 "log_calls, metrics_listen, part_memory_gb, tls_cert, tls_key, tls_client_ca, token_file");
   app.add_option("--workers", config.workers, "threads for clearance queries")->check(CLI::Range(1, 64));
   app.add_option("--validation-workers", config.validation_workers, "threads validating steps of parametric parts")
       ->check(CLI::Range(1, 64));
@@ -112,6 +131,12 @@ int main(int argc, char** argv) {
   app.add_option("--drain-seconds", config.drain_seconds, "on SIGTERM, how long in-flight calls may finish")
       ->check(CLI::Range(0, 600));
   app.add_option("--log-level", config.log_level, "trace, debug, info, warn, error");
+  app.add_option("--log-format", config.log_format, "text, or json: one JSON object per line");
+  app.add_option("--log-file", config.log_file, "append the log to this file instead of standard error");
+  app.add_option("--log-calls", config.log_calls, "one log line per answered call (info; calls the daemon failed: error)");
+  app.add_option("--metrics-listen", config.metrics_listen,
+                 "serve GET /metrics (Prometheus text) on this loopback host:port (port 0: any free port)");
+  app.add_option("--metrics-port-file", config.metrics_port_file, "write the bound /metrics port to this file");
   app.add_option("--tls-cert", config.access.tls_cert_file, "PEM certificate chain: serve TLS (needed beyond loopback)");
   app.add_option("--tls-key", config.access.tls_key_file, "PEM private key of --tls-cert (mode 0600)");
   app.add_option("--tls-client-ca", config.access.tls_client_ca, "PEM CA: require client certificates it signed (mutual TLS)");
@@ -143,7 +168,22 @@ int main(int argc, char** argv) {
     sandbox.memory_bytes = static_cast<std::uint64_t>(config.cad_check_memory_gb * 1073741824.0);
     gk::engine::set_cad_sandbox(sandbox);
   }
-  spdlog::set_level(spdlog::level::from_str(config.log_level));
+  {
+    gk::server::LogOptions log;
+    const auto format = gk::server::log_format_named(config.log_format);
+    if (!format) {
+      spdlog::error("--log-format: \"{}\" is not text or json", config.log_format);
+      return 2;
+    }
+    log.format = *format;
+    log.level = config.log_level;
+    log.file = config.log_file;
+    log.call_lines = config.log_calls;
+    if (auto failed = gk::server::configure_logging(log)) {
+      spdlog::error("{}", *failed);
+      return 2;
+    }
+  }
 
   // Block the shutdown signals in every thread; the main thread waits for them below.
   sigset_t signals;
@@ -223,6 +263,23 @@ int main(int argc, char** argv) {
     spdlog::error("cannot listen on {}", config.listen);
     return 1;
   }
+  std::unique_ptr<gk::server::MetricsEndpoint> metrics;
+  if (!config.metrics_listen.empty()) {
+    metrics = std::make_unique<gk::server::MetricsEndpoint>([&service] { return gk::server::prometheus_text(service.metrics()); });
+    auto bound = metrics->start(config.metrics_listen);
+    if (!bound.ok()) {
+      spdlog::error("{}", bound.error().to_string());
+      server->Shutdown();
+      service.stop_work();
+      return 2;
+    }
+    spdlog::info("metrics on http://{}/metrics", config.metrics_listen.substr(0, config.metrics_listen.rfind(':') + 1) +
+                                                     std::to_string(bound.value()));
+    if (!config.metrics_port_file.empty()) {
+      std::ofstream(config.metrics_port_file + ".tmp") << bound.value() << "\n";
+      std::rename((config.metrics_port_file + ".tmp").c_str(), config.metrics_port_file.c_str());
+    }
+  }
   server->GetHealthCheckService()->SetServingStatus(true);
   spdlog::info("gatekeeperd serving on port {} (data in {}, machine {})", port, config.data_dir,
                gk::engine::MachineRegistry::kDefaultMachine);
@@ -236,6 +293,7 @@ int main(int argc, char** argv) {
   spdlog::info("signal {}: draining", received);
   server->GetHealthCheckService()->SetServingStatus(false);
   server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(config.drain_seconds));
+  metrics.reset();
   service.stop_work();
   spdlog::info("stopped");
   return 0;

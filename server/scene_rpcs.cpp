@@ -22,37 +22,46 @@ namespace {
 // over); a full pool ends the stream with RESOURCE_EXHAUSTED, a cancelled client skips the work.
 class DragReactor final : public grpc::ServerBidiReactor<pb::MoveObjectRequest, pb::MoveResult> {
  public:
-  DragReactor(GatekeeperService& service, grpc::CallbackServerContext* ctx) : service_(service), ctx_(ctx) {
+  // Each frame is counted as "DragObject.move" (its latency in RpcStats; no call line, a drag
+  // sends one per rendered frame); the stream is one call with one call line at its end.
+  DragReactor(GatekeeperService& service, grpc::CallbackServerContext* ctx)
+      : service_(service), ctx_(ctx), call_(begin_call(ctx, "DragObject")) {
     StartRead(&request_);
   }
   void OnReadDone(bool ok) override {
-    if (!ok) return Finish(grpc::Status::OK);  // the client is done dragging
-    const auto t0 = Clock::now();
-    const bool queued = service_.scene_pool().try_submit([this, t0] { answer_frame(t0); });
+    if (!ok) return end(grpc::Status::OK);  // the client is done dragging
+    const Call frame = begin_frame(call_, "DragObject.move");
+    const bool queued = service_.scene_pool().try_submit([this, frame] { answer_frame(frame); });
     if (!queued) {
-      service_.stats().record("DragObject.move", us_since(t0), true);
-      Finish({grpc::StatusCode::RESOURCE_EXHAUSTED, "DragObject: too much scene work queued, retry later"});
+      service_.stats().record(frame.method, us_since(frame.t0), true);
+      end({grpc::StatusCode::RESOURCE_EXHAUSTED, "DragObject: too much scene work queued, retry later"});
     }
   }
   void OnWriteDone(bool ok) override {
-    if (!ok) return Finish({grpc::StatusCode::CANCELLED, "the client went away"});
+    if (!ok) return end({grpc::StatusCode::CANCELLED, "the client went away"});
     StartRead(&request_);
   }
   void OnDone() override { delete this; }
 
  private:
   // On a scene worker: the frame's move and contacts, then its reply (or the stream's end).
-  void answer_frame(Clock::time_point t0) {
-    if (ctx_->IsCancelled()) return Finish({grpc::StatusCode::CANCELLED, "cancelled by the client"});
+  void answer_frame(const Call& frame) {
+    if (ctx_->IsCancelled()) return end({grpc::StatusCode::CANCELLED, "cancelled by the client"});
     reply_.Clear();
-    const grpc::Status s = guarded_status("DragObject", [&] { return service_.move(request_, &reply_, &session_); });
-    service_.stats().record("DragObject.move", us_since(t0), !s.ok());
-    if (!s.ok()) return Finish(s);
+    const StopToken stop([this] { return ctx_->IsCancelled() || past_deadline(ctx_); });
+    const grpc::Status s = guarded_status(frame, [&] { return service_.move(request_, &reply_, &session_, stop); });
+    service_.stats().record(frame.method, us_since(frame.t0), !s.ok());
+    if (!s.ok()) return end(s);
     StartWrite(&reply_);
+  }
+  void end(const grpc::Status& status) {
+    end_call(service_.stats(), call_, status);
+    Finish(status);
   }
 
   GatekeeperService& service_;
   grpc::CallbackServerContext* ctx_;
+  const Call call_;
   pb::MoveObjectRequest request_;
   pb::MoveResult reply_;
   DragSession session_;
@@ -203,7 +212,7 @@ grpc::ServerUnaryReactor* GatekeeperService::MoveObject(grpc::CallbackServerCont
 
 grpc::ServerBidiReactor<pb::MoveObjectRequest, pb::MoveResult>* GatekeeperService::DragObject(grpc::CallbackServerContext* ctx) {
   if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) {
-    stats_.record("DragObject", 0.0, true);
+    end_call(stats_, begin_call(ctx, "DragObject"), allowed);
     return new RefusedStream<grpc::ServerBidiReactor<pb::MoveObjectRequest, pb::MoveResult>>(allowed);
   }
   return new DragReactor(*this, ctx);
@@ -232,14 +241,15 @@ grpc::ServerUnaryReactor* GatekeeperService::GetScene(grpc::CallbackServerContex
 
 grpc::ServerUnaryReactor* GatekeeperService::StartAudit(grpc::CallbackServerContext* ctx, const pb::StartAuditRequest* request,
                                                         pb::AuditJob* response) {
-  const auto t0 = Clock::now();
-  if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return finish(ctx, stats_, "StartAudit", t0, allowed);
-  auto asked = to_audit_options(*request);
-  if (!asked.ok()) return finish(ctx, stats_, "StartAudit", t0, to_status(asked.error()));
-  auto started = engine_.start_audit(request->scene_id(), asked.value(), request->baseline_job_id());
-  if (!started.ok()) return finish(ctx, stats_, "StartAudit", t0, to_status(started.error()));
-  response->set_job_id(started.value());
-  return finish(ctx, stats_, "StartAudit", t0, grpc::Status::OK);
+  return unary(ctx, stats_, "StartAudit", [&]() -> grpc::Status {
+    if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
+    auto asked = to_audit_options(*request);
+    if (!asked.ok()) return to_status(asked.error());
+    auto started = engine_.start_audit(request->scene_id(), asked.value(), request->baseline_job_id());
+    if (!started.ok()) return to_status(started.error());
+    response->set_job_id(started.value());
+    return grpc::Status::OK;
+  }, response);
 }
 
 grpc::ServerWriteReactor<pb::AuditProgress>* GatekeeperService::WatchAudit(grpc::CallbackServerContext* /*ctx*/,

@@ -43,6 +43,10 @@ class UploadSlots {
     auto it = open_.find(token);
     if (it != open_.end()) it->second.last = Clock::now();
   }
+  std::size_t open_count() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return open_.size();
+  }
   // Before the stream's context goes away (the reaper never touches a released one).
   void release(std::uint64_t token) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -74,7 +78,7 @@ class UploadSlots {
 
   const std::size_t max_open_;
   const std::chrono::milliseconds idle_limit_;
-  std::mutex mutex_;
+  mutable std::mutex mutex_;
   std::condition_variable wake_;
   std::map<std::uint64_t, Open> open_;
   std::uint64_t next_ = 1;

@@ -205,6 +205,11 @@ void AuditJob::run(PartRegistry& parts, std::function<void(const AuditSnapshot&)
   });
 }
 
+bool AuditJob::running() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return state_.status == AuditStatus::kRunning;
+}
+
 AuditSnapshot AuditJob::snapshot() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return state_;

@@ -70,6 +70,7 @@ class AuditJob {
   // The job's run threw: it ends FAILED with this message (unless it had ended already).
   void fail_unexpectedly(const std::string& message);
   AuditSnapshot snapshot() const;
+  bool running() const;  // cheap (snapshot() copies the clashes)
   // Waits until the progress changes (or timeout); returns the snapshot.
   AuditSnapshot wait_for_change(unsigned long long seen_done, AuditStatus seen_status, std::chrono::milliseconds timeout) const;
   // Watchers are told of every change (called on the thread that made it, never under the job's

@@ -81,6 +81,13 @@ std::size_t AuditJobs::in_memory() const {
   return jobs_.size();
 }
 
+std::size_t AuditJobs::running() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::size_t n = 0;
+  for (const auto& [id, job] : jobs_) n += job->running() ? 1 : 0;
+  return n;
+}
+
 void AuditJobs::cancel_all() {
   std::lock_guard<std::mutex> lock(mutex_);
   for (auto& [id, job] : jobs_) job->cancel();

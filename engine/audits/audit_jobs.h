@@ -46,6 +46,7 @@ class AuditJobs {
   void stop();
   Result<std::shared_ptr<AuditJob>> get(const std::string& id);
   std::size_t in_memory() const;
+  std::size_t running() const;  // started and not ended (those waiting for an audit thread too)
 
  private:
   void drop_beyond_limit();  // mutex_ held

@@ -79,6 +79,7 @@ Result<std::shared_ptr<const LoadedPart>> PartRegistry::load(const std::string& 
       auto it = loaded_.find({id, key});
       if (it != loaded_.end()) {
         it->second.last_used = ++use_clock_;
+        ++hits_;
         return it->second.part;
       }
     }
@@ -91,8 +92,10 @@ Result<std::shared_ptr<const LoadedPart>> PartRegistry::load(const std::string& 
     auto it = loaded_.find({id, key_deflection});
     if (it != loaded_.end()) {
       it->second.last_used = ++use_clock_;
+      ++hits_;
       return it->second.part;
     }
+    ++loads_;
   }
   auto part = std::make_shared<LoadedPart>();
   double used_deflection = key_deflection;
@@ -125,7 +128,7 @@ Result<std::shared_ptr<const LoadedPart>> PartRegistry::load(const std::string& 
 
 PartRegistry::MemoryStats PartRegistry::memory_stats() const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return {loaded_.size(), loaded_bytes_, evicted_};
+  return {loaded_.size(), loaded_bytes_, evicted_, memory_budget_bytes_, hits_, loads_, bvh_cache_.stats()};
 }
 
 }  // namespace gk::engine

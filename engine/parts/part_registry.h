@@ -38,6 +38,9 @@ class PartRegistry {
 
   struct MemoryStats {
     std::size_t parts = 0, bytes = 0, evicted = 0;
+    std::size_t budget_bytes = 0;
+    std::uint64_t hits = 0, loads = 0;  // load() answered from memory, and read from the store
+    BvhCache::Stats bvh_cache;          // trees loaded from disk, built, rejected (damaged or foreign)
   };
   MemoryStats memory_stats() const;
 
@@ -72,6 +75,7 @@ class PartRegistry {
   mutable std::mutex mutex_;
   std::map<std::pair<std::string, double>, Loaded> loaded_;
   std::size_t loaded_bytes_ = 0, evicted_ = 0;
+  std::uint64_t hits_ = 0, loads_ = 0;
   std::uint64_t use_clock_ = 0;
 };
 

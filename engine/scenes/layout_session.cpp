@@ -99,7 +99,7 @@ void LayoutSession::gather(const GridCellRange& range) {
   last_range_ = range;
 }
 
-Result<FrameAnswer> LayoutSession::move_to(const RigidTransform& pose) {
+Result<FrameAnswer> LayoutSession::move_to(const RigidTransform& pose, const StopToken& stop) {
   if (!pose.is_finite() || !pose.is_rigid()) return invalid_argument("pose", "must be a finite rigid transform");
   AuditObject& self = objects_[moving_];
   self.pose = pose;
@@ -140,6 +140,7 @@ Result<FrameAnswer> LayoutSession::move_to(const RigidTransform& pose) {
       out.worst = Verdict::kCollision;
       continue;
     }
+    if (stop.stop_requested()) return stopped("the moved object's contacts");
     ++out.exact_checks;
     VerdictOptions options;
     options.max_contacts = kFirstContacts;

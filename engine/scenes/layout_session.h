@@ -16,6 +16,7 @@
 #include "kernel/mesh/oriented_box.h"
 #include "engine/audits/scene_audit.h"
 #include "kernel/broadphase/uniform_grid.h"
+#include "kernel/core/stop_token.h"
 
 #include <cstdint>
 #include <memory>
@@ -46,7 +47,8 @@ class LayoutSession {
   // `objects` are the scene; `moving` the one being dragged (its pose in `objects` is the start).
   static Result<std::unique_ptr<LayoutSession>> create(std::vector<AuditObject> objects, std::uint32_t moving,
                                                        double clearance_mm);
-  Result<FrameAnswer> move_to(const RigidTransform& pose);
+  // `stop`: a caller that gave up (deadline, cancel) ends the frame (kStopped) before its next exact check.
+  Result<FrameAnswer> move_to(const RigidTransform& pose, const StopToken& stop = {});
   const AuditObject& moving() const { return objects_[moving_]; }
   std::uint32_t moving_index() const { return moving_; }
   const RigidTransform& pose_of(std::uint32_t object) const { return objects_[object].pose; }

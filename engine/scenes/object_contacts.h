@@ -1,11 +1,8 @@
-// One object against its neighbours in a scene: what a move (PutObject, MoveObject, each frame
-// of a drag) is answered with.
+// What a move is answered with: one object against its neighbours in a scene (PutObject,
+// MoveObject, each frame of a drag). Every move is decided by engine/scenes/drag_session.
 #pragma once
 
-#include "engine/parts/part_registry.h"
-#include "engine/scenes/scene_store.h"
 #include "kernel/query/contact_verdict.h"
-#include "kernel/core/stop_token.h"
 
 #include <string>
 #include <vector>
@@ -23,14 +20,8 @@ struct ObjectContactResult {
 
 struct MoveOutcome {
   Verdict verdict = Verdict::kClear;  // the worst over the neighbours
-  std::vector<ObjectContactResult> contacts;
-  unsigned candidates = 0;
+  std::vector<ObjectContactResult> contacts;  // colliding, touching or closer than the clearance, by object id
+  unsigned candidates = 0;            // neighbours whose boxes (grown by the clearance) met the object's
 };
-
-// The object against every other object of the scene: those whose boxes (grown by clearance_mm)
-// meet get an exact verdict; colliding, touching or closer-than-clearance ones are reported.
-// `stop`: a caller that gave up (deadline, cancel) ends the work (kStopped).
-Result<MoveOutcome> object_contacts(const SceneRecord& scene, const std::string& object_id, double clearance_mm,
-                                    PartRegistry& parts, const StopToken& stop = {});
 
 }  // namespace gk::engine

@@ -60,10 +60,14 @@ std::string StepAnswers::key_of(const StepQuestion& q, const MachineVersion& mac
   return k.take();
 }
 
-std::optional<StepReply> StepAnswers::lookup(const std::string& key, Clock::time_point t0) const {
+std::optional<StepReply> StepAnswers::lookup(const std::string& key, Clock::time_point t0, bool count_miss) const {
   std::lock_guard<std::mutex> lock(mutex_);
   auto it = answers_.find(key);
-  if (it == answers_.end()) return std::nullopt;
+  if (it == answers_.end()) {
+    if (count_miss) ++misses_;
+    return std::nullopt;
+  }
+  ++hits_;
   StepReply reply{it->second, true};
   reply.answer.decided_by = p4::Stage::kCache;
   reply.answer.times = p4::StageTimes{};
@@ -76,7 +80,13 @@ std::optional<StepReply> StepAnswers::cached(const StepQuestion& question) const
   const auto t0 = Clock::now();
   auto machine = machines_.current(question.machine_id);
   if (!machine.ok()) return std::nullopt;
-  return lookup(key_of(question, machine.value()), t0);
+  // A miss here is asked again in validate(), which counts it.
+  return lookup(key_of(question, machine.value()), t0, false);
+}
+
+StepAnswers::CacheStats StepAnswers::cache_stats() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return {hits_, misses_, answers_.size()};
 }
 
 Result<StepReply> StepAnswers::validate(const StepQuestion& q) {
@@ -85,7 +95,7 @@ Result<StepReply> StepAnswers::validate(const StepQuestion& q) {
   if (!current.ok()) return Error{current.error().code, "machine_id", current.error().message};
   const MachineVersion& asked = current.value();
   const std::string key = key_of(q, asked);
-  if (auto hit = lookup(key, t0)) return *hit;
+  if (auto hit = lookup(key, t0, true)) return *hit;
   // A miss: the model is read for the checks (an answer of a model replaced meanwhile is not kept).
   auto machine = machines_.get(q.machine_id);
   if (!machine.ok()) return Error{machine.error().code, "machine_id", machine.error().message};

@@ -10,6 +10,7 @@
 #include "machine_models/p4/step_validator.h"
 
 #include <cstddef>
+#include <cstdint>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -48,15 +49,23 @@ class StepAnswers {
   // The answer: from the cache, else validated (fields checked first, each error naming it).
   Result<StepReply> validate(const StepQuestion& question);
 
+  // Lookups answered from the cache and not, and the answers kept (what /metrics reports).
+  struct CacheStats {
+    std::uint64_t hits = 0, misses = 0;
+    std::size_t entries = 0;
+  };
+  CacheStats cache_stats() const;
+
  private:
   static std::string key_of(const StepQuestion& question, const MachineVersion& machine);
-  std::optional<StepReply> lookup(const std::string& key, std::chrono::steady_clock::time_point t0) const;
+  std::optional<StepReply> lookup(const std::string& key, std::chrono::steady_clock::time_point t0, bool count_miss) const;
 
   MachineRegistry& machines_;
   PartRegistry& parts_;
   const std::size_t capacity_;
   mutable std::mutex mutex_;
   std::unordered_map<std::string, p4::StepAnswer> answers_;
+  mutable std::uint64_t hits_ = 0, misses_ = 0;  // mutex_ held
 };
 
 }  // namespace gk::engine

@@ -11,6 +11,7 @@
 #include "mesh_io/mesh_file_reader.h"
 #include "tests/server/daemon_fixture.h"
 #include "tests/support/near_contact_poses.h"
+#include "tests/support/file_text.h"
 #include "tests/support/random_meshes.h"
 
 #include <Eigen/Geometry>
@@ -49,22 +50,6 @@ Part load(const std::string& relative, double scale) {
   }
   p.bvh = gk::MeshBvh::build(gk::testing::share(p.mesh)).value();
   return p;
-}
-
-// OBJ text with every coordinate to 17 significant digits: the daemon reads it in double, so it
-// holds exactly the mesh measured in process.
-std::string obj_text(const gk::TriangleMesh& m) {
-  std::string out;
-  char line[128];
-  for (const Vec3& v : m.vertices()) {
-    std::snprintf(line, sizeof line, "v %.17g %.17g %.17g\n", v.x(), v.y(), v.z());
-    out += line;
-  }
-  for (const auto& f : m.faces()) {
-    std::snprintf(line, sizeof line, "f %u %u %u\n", f[0] + 1, f[1] + 1, f[2] + 1);
-    out += line;
-  }
-  return out;
 }
 
 void to_proto(const RigidTransform& t, pb::Pose* out) {
@@ -116,8 +101,8 @@ int main(int argc, char** argv) {
   std::printf("| pair, path | queries | p10 | median | p90 | p99 | max (us) |\n|---|---|---|---|---|---|---|\n");
   for (const PairSpec& spec : pairs) {
     const Part a = load(spec.a, spec.scale_a), b = load(spec.b, spec.scale_b);
-    const std::string id_a = gk::testing::upload_part_id(*stub, obj_text(a.mesh), "obj");
-    const std::string id_b = gk::testing::upload_part_id(*stub, obj_text(b.mesh), "obj");
+    const std::string id_a = gk::testing::upload_part_id(*stub, gk::testing::obj_text(a.mesh), "obj");
+    const std::string id_b = gk::testing::upload_part_id(*stub, gk::testing::obj_text(b.mesh), "obj");
     if (id_a.empty() || id_b.empty()) return 2;
     std::vector<pb::ClearanceQueryRequest> requests;
     for (const RigidTransform& pose : gk::testing::near_contact_poses(*a.bvh, *b.bvh, spec.seed, 100)) {

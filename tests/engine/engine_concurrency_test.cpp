@@ -7,9 +7,9 @@
 #include "engine/parts/part_store.h"
 #include "engine/steps/step_answers.h"
 #include "engine/work_pool.h"
+#include "tests/support/file_text.h"
 
 #include <gtest/gtest.h>
-#include <openssl/sha.h>
 
 #include <atomic>
 #include <cmath>
@@ -28,18 +28,6 @@ std::string temp_dir(const std::string& tag) {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir.string();
-}
-
-std::string sha256_hex(const std::string& bytes) {
-  unsigned char digest[SHA256_DIGEST_LENGTH];
-  SHA256(reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size(), digest);
-  std::string hex;
-  char two[3];
-  for (unsigned char b : digest) {
-    std::snprintf(two, sizeof two, "%02x", b);
-    hex += two;
-  }
-  return hex;
 }
 
 // A flat grid of n x n squares (2 n^2 triangles) as OBJ text: parts of different sizes.
@@ -64,7 +52,7 @@ TEST(EngineConcurrency, PartLoadsRacingEvictionEachAnswerTheirOwnPart) {
   std::map<std::string, std::uint32_t> triangles;
   for (int n : {10, 20, 30, 40}) {
     const std::string bytes = grid_obj(n);
-    auto upload = store->begin("grid" + std::to_string(n), "obj", bytes.size(), sha256_hex(bytes)).value();
+    auto upload = store->begin("grid" + std::to_string(n), "obj", bytes.size(), testing::sha256_hex(bytes)).value();
     ASSERT_TRUE(upload->append(bytes).ok());
     auto record = store->finish(std::move(upload), [](const std::string& path, PartRecord r) -> Result<PartRecord> {
       auto mesh = PartRegistry::read_any(path, "obj", 0.05);

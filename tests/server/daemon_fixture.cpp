@@ -26,8 +26,6 @@ std::string temp_dir(const std::string& tag) {
   return dir.string();
 }
 
-std::string sha256_hex(const std::string& bytes) { return client::sha256_hex(bytes); }
-
 std::string read_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::stringstream s;
@@ -39,8 +37,11 @@ Daemon::Daemon(const std::string& data_dir, std::vector<std::string> extra_args,
                std::shared_ptr<grpc::ChannelCredentials> credentials, grpc::ChannelArguments channel_args) {
   const std::string port_file = data_dir + "/port";
   std::filesystem::remove(port_file);
-  std::vector<std::string> args = {GATEKEEPERD_PATH, "--data-dir", data_dir, "--port-file", port_file,
-                                   "--log-level", "warn", "--drain-seconds", "1"};
+  std::vector<std::string> args = {GATEKEEPERD_PATH, "--data-dir", data_dir, "--port-file", port_file, "--drain-seconds", "1"};
+  if (std::find(extra_args.begin(), extra_args.end(), "--log-level") == extra_args.end()) {
+    args.push_back("--log-level");
+    args.push_back("warn");
+  }
   if (std::find(extra_args.begin(), extra_args.end(), "--listen") == extra_args.end()) {
     args.push_back("--listen");
     args.push_back("127.0.0.1:0");

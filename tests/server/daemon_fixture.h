@@ -3,6 +3,7 @@
 #pragma once
 
 #include "gatekeeper/v1/gatekeeper.grpc.pb.h"
+#include "tests/support/file_text.h"  // sha256_hex, obj_text
 
 #include <grpcpp/grpcpp.h>
 
@@ -34,7 +35,6 @@ class Daemon {
 };
 
 std::string temp_dir(const std::string& tag);
-std::string sha256_hex(const std::string& bytes);
 std::string read_file(const std::string& path);
 
 // Uploads and returns the part id (a failed upload fails the test and returns "").

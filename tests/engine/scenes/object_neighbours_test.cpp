@@ -1,0 +1,229 @@
+// One object against its neighbours, the one path of every move (PutObject, MoveObject, drag
+// frames: engine/scenes/drag_session), against an all-pairs oracle that involves no tree, grid,
+// box or cache: every triangle pair of the moved object and each other object (tests/support's
+// brute force). Scenes of non-convex blobs packed so that many pairs collide, touch or sit within
+// the clearance; every object is moved, and a drag's frames (with the session's caches) must
+// answer exactly what a fresh one-frame session answers at the same pose.
+#include "engine/gatekeeper_engine.h"
+#include "tests/support/brute_force.h"
+#include "tests/support/file_text.h"
+#include "tests/support/random_meshes.h"
+#include "tests/support/sanitized_build.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <random>
+#include <set>
+
+namespace gk::engine {
+namespace {
+
+class Stores {
+ public:
+  explicit Stores(const std::string& tag)
+      : dir_((std::filesystem::temp_directory_path() / ("gk-neighbours-" + tag + "-" + std::to_string(::getpid()))).string()) {
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+    store_ = PartStore::open(dir_).value();
+    parts_ = std::make_unique<PartRegistry>(*store_, dir_ + "/bvh-cache");
+    machines_ = MachineRegistry::create(dir_ + "/machines").value();
+    scenes_ = SceneStore::open(dir_).value();
+    engine_ = std::make_unique<Engine>(*machines_, *parts_, *scenes_, nullptr);
+  }
+  ~Stores() {
+    engine_.reset();
+    std::filesystem::remove_all(dir_);
+  }
+  Engine& engine() { return *engine_; }
+  PartRegistry& parts() { return *parts_; }
+  std::string upload(const TriangleMesh& mesh, const std::string& name) {
+    const std::string bytes = testing::obj_text(mesh);
+    auto upload = engine_->begin_upload(name, "obj", bytes.size(), testing::sha256_hex(bytes));
+    EXPECT_TRUE(upload.ok()) << upload.error().to_string();
+    EXPECT_TRUE(upload.value()->append(bytes).ok());
+    auto record = engine_->finish_upload(std::move(upload).value());
+    EXPECT_TRUE(record.ok()) << record.error().to_string();
+    return record.value().id;
+  }
+
+ private:
+  std::string dir_;
+  std::unique_ptr<PartStore> store_;
+  std::unique_ptr<PartRegistry> parts_;
+  std::unique_ptr<MachineRegistry> machines_;
+  std::unique_ptr<SceneStore> scenes_;
+  std::unique_ptr<Engine> engine_;
+};
+
+struct Placed {
+  std::string id;
+  const TriangleMesh* mesh;
+  StoredPose pose;
+};
+
+StoredPose random_stored_pose(std::mt19937_64& rng, double range) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  StoredPose p;
+  p.translation = Vec3(u(rng), u(rng), u(rng)) * range;
+  Vec3 axis(u(rng), u(rng), u(rng));
+  if (axis.norm() < 1e-3) axis = Vec3::UnitZ();
+  p.axis = axis.normalized();
+  p.angle_deg = 180.0 * u(rng);
+  return p;
+}
+
+// What the oracle says of one pair: the distance between the surfaces, and whether any two
+// triangles meet (no nesting is possible among blobs of these sizes: a contact is a meeting).
+struct OraclePair {
+  double distance_mm;
+  bool meet;
+};
+
+OraclePair oracle(const Placed& a, const Placed& b) {
+  const RigidTransform pa = a.pose.transform(), pb = b.pose.transform();
+  const bool meet = !testing::brute_force_contacts(*a.mesh, pa, *b.mesh, pb).empty();
+  return {meet ? 0.0 : testing::brute_force_distance(*a.mesh, pa, *b.mesh, pb), meet};
+}
+
+// Checks one move's answer against the oracle over every other object.
+void expect_matches_oracle(const MoveOutcome& got, const Placed& moved, const std::vector<Placed>& scene, double clearance_mm,
+                           int* listed_total, int* colliding_total) {
+  std::map<std::string, const ObjectContactResult*> listed;
+  for (const ObjectContactResult& c : got.contacts) listed[c.other] = &c;
+  Verdict worst = Verdict::kClear;
+  for (const Placed& other : scene) {
+    if (other.id == moved.id) continue;
+    const OraclePair truth = oracle(moved, other);
+    const auto it = listed.find(other.id);
+    // A margin for the kernel's contact tolerance and rounding: pairs this close to the clearance
+    // may go either way; beyond it the answer is fixed.
+    const double margin = 1e-6;
+    if (truth.meet) {
+      ASSERT_NE(it, listed.end()) << moved.id << " meets " << other.id << " but the move does not list it";
+      EXPECT_NE(it->second->verdict, Verdict::kClear) << moved.id << " meets " << other.id;
+      ++*colliding_total;
+    } else if (truth.distance_mm < clearance_mm - margin) {
+      ASSERT_NE(it, listed.end()) << moved.id << " is " << truth.distance_mm << " mm from " << other.id
+                                  << ", within the clearance " << clearance_mm << ", but not listed";
+      if (it->second->verdict == Verdict::kClear) {
+        EXPECT_NEAR(it->second->distance_mm, truth.distance_mm, 1e-9);
+      }
+    } else if (truth.distance_mm > std::max(clearance_mm, 0.0) + margin) {
+      if (it != listed.end()) {
+        EXPECT_EQ(it->second->verdict, Verdict::kClear) << moved.id << " is " << truth.distance_mm << " mm from " << other.id;
+        EXPECT_NEAR(it->second->distance_mm, truth.distance_mm, 1e-9);
+      }
+      EXPECT_TRUE(it == listed.end() || truth.distance_mm <= clearance_mm + margin)
+          << other.id << " at " << truth.distance_mm << " mm is listed beyond the clearance " << clearance_mm;
+    }
+    if (it != listed.end() && severity(it->second->verdict) > severity(worst)) worst = it->second->verdict;
+  }
+  EXPECT_EQ(got.verdict, worst);
+  *listed_total += static_cast<int>(got.contacts.size());
+}
+
+TEST(ObjectNeighbours, EveryMoveListsExactlyTheNeighboursTheAllPairsOracleFinds) {
+  Stores stores("oracle");
+  Engine& engine = stores.engine();
+  std::mt19937_64 rng(20261126);
+  std::vector<TriangleMesh> meshes;
+  testing::Rng mesh_rng(7);
+  for (int i = 0; i < 4; ++i) meshes.push_back(testing::random_closed_blob(mesh_rng, 2, 20.0 + 4.0 * i, 0.25, Vec3::Zero()));
+  std::vector<std::string> part_ids;
+  for (std::size_t i = 0; i < meshes.size(); ++i) part_ids.push_back(stores.upload(meshes[i], "blob" + std::to_string(i)));
+
+  int listed_total = 0, colliding_total = 0, moves = 0;
+  const int scenes = 3;  // one per clearance
+  for (int s = 0; s < scenes; ++s) {
+    auto scene = engine.create_scene("packed").value();
+    std::vector<SceneObjectRecord> objects;
+    std::vector<Placed> placed;
+    const int n = 24;
+    for (int i = 0; i < n; ++i) {
+      SceneObjectRecord o;
+      o.id = "o" + std::to_string(i);
+      const std::size_t m = static_cast<std::size_t>(rng() % meshes.size());
+      o.part_id = part_ids[m];
+      o.pose = random_stored_pose(rng, 90.0);
+      objects.push_back(o);
+      placed.push_back({o.id, &meshes[m], o.pose});
+    }
+    ASSERT_TRUE(engine.put_objects(scene.id, objects).ok());
+    const double clearance = std::vector<double>{0.0, 1.5, 8.0}[static_cast<std::size_t>(s) % 3];
+    for (int i = 0; i < n; ++i) {
+      // A small move of each object, so that the stored scene is what the oracle sees.
+      StoredPose pose = placed[static_cast<std::size_t>(i)].pose;
+      pose.translation += Vec3(0.5, -0.25, 0.125);
+      placed[static_cast<std::size_t>(i)].pose = pose;
+      auto got = engine.move_object(scene.id, placed[static_cast<std::size_t>(i)].id, pose, clearance);
+      ASSERT_TRUE(got.ok()) << got.error().to_string();
+      expect_matches_oracle(got.value(), placed[static_cast<std::size_t>(i)], placed, clearance, &listed_total, &colliding_total);
+      ++moves;
+    }
+  }
+  std::printf("%d moves, %d neighbours listed, %d meeting\n", moves, listed_total, colliding_total);
+  // The scenes are packed: the comparison covered contacts, not only empty answers.
+  EXPECT_GT(colliding_total, moves / 2);
+  EXPECT_GT(listed_total, colliding_total);
+}
+
+TEST(ObjectNeighbours, ADragsFramesAnswerWhatAFreshMoveAnswersAtTheSamePose) {
+  Stores stores("drag");
+  Engine& engine = stores.engine();
+  testing::Rng mesh_rng(11);
+  const TriangleMesh blob = testing::random_closed_blob(mesh_rng, 2, 25.0, 0.3, Vec3::Zero());
+  const std::string part = stores.upload(blob, "blob");
+  auto scene = engine.create_scene("row").value();
+  std::vector<SceneObjectRecord> objects;
+  std::vector<Placed> placed;
+  for (int i = 0; i < 12; ++i) {
+    SceneObjectRecord o;
+    o.id = "o" + std::to_string(10 + i);
+    o.part_id = part;
+    o.pose.translation = Vec3(60.0 * i, 0.0, 0.0);
+    objects.push_back(o);
+    placed.push_back({o.id, &blob, o.pose});
+  }
+  SceneObjectRecord dragged;
+  dragged.id = "dragged";
+  dragged.part_id = part;
+  dragged.pose.translation = Vec3(-100.0, 30.0, 0.0);
+  objects.push_back(dragged);
+  placed.push_back({dragged.id, &blob, dragged.pose});
+  ASSERT_TRUE(engine.put_objects(scene.id, objects).ok());
+
+  DragSession drag;
+  int listed_total = 0, colliding_total = 0;
+  const int frames = testing::samples(240);
+  for (int f = 0; f < frames; ++f) {
+    StoredPose pose;
+    pose.translation = Vec3(-100.0 + 3.5 * f, 30.0 - 0.3 * f, 2.0 * std::sin(0.1 * f));
+    pose.axis = Vec3(0.3, 0.2, 1.0).normalized();
+    pose.angle_deg = 1.5 * f;
+    placed.back().pose = pose;
+    auto framed = engine.move_object(scene.id, "dragged", pose, 2.0, &drag);
+    ASSERT_TRUE(framed.ok()) << framed.error().to_string();
+    // The stored scene at this pose, answered by a fresh one-frame session (nothing stored: the
+    // drag's session stays valid for its next frame).
+    auto fresh = DragSession::once(engine.scene(scene.id).value(), "dragged", 2.0, stores.parts());
+    ASSERT_TRUE(fresh.ok());
+    ASSERT_EQ(framed.value().contacts.size(), fresh.value().contacts.size()) << "frame " << f;
+    EXPECT_EQ(framed.value().verdict, fresh.value().verdict) << "frame " << f;
+    for (std::size_t c = 0; c < fresh.value().contacts.size(); ++c) {
+      EXPECT_EQ(framed.value().contacts[c].other, fresh.value().contacts[c].other);
+      EXPECT_EQ(framed.value().contacts[c].verdict, fresh.value().contacts[c].verdict);
+      if (fresh.value().contacts[c].verdict == Verdict::kClear) {
+        EXPECT_DOUBLE_EQ(framed.value().contacts[c].distance_mm, fresh.value().contacts[c].distance_mm);
+      }
+    }
+    if (f % 8 == 0) expect_matches_oracle(framed.value(), placed.back(), placed, 2.0, &listed_total, &colliding_total);
+  }
+  EXPECT_GT(colliding_total, 0);
+}
+
+}  // namespace
+}  // namespace gk::engine
