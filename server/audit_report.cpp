@@ -81,14 +81,16 @@ void report_to_proto(const AuditSnapshot& snapshot, pb::AuditReport* out, std::s
     p->set_depth_mm(c.depth_mm);
     p->set_volume_mm3(c.volume_mm3);
     p->set_volume_error_bound_mm3(c.volume_error_bound_mm3);
-    to_proto(c.depth_direction, p->mutable_depth_direction());
-    for (const ClashRegion& region : c.regions) {
+    if (c.depth_direction) to_proto(*c.depth_direction, p->mutable_depth_axis(), p->mutable_depth_direction());
+    for (const engine::ContactPlace& place : c.regions) {
+      to_proto(place, p->add_contact_regions());
+      // The same place in the older message (kept for old clients).
       pb::ClashRegion* q = p->add_regions();
-      to_proto(region.point, q->mutable_point());
-      to_proto(region.bounds.min, q->mutable_bounds_min());
-      to_proto(region.bounds.max, q->mutable_bounds_max());
-      q->set_contact_pairs(region.contacts);
-      q->set_min_distance_mm(region.min_distance_mm);
+      to_proto(place.point_a, q->mutable_point());
+      to_proto(place.bounds.min, q->mutable_bounds_min());
+      to_proto(place.bounds.max, q->mutable_bounds_max());
+      q->set_contact_pairs(place.triangle_pairs);
+      q->set_min_distance_mm(place.min_distance_mm);
     }
   }
   const engine::ClashGroups groups = engine::group_clashes(snapshot.clashes);
@@ -157,11 +159,17 @@ AuditSnapshot snapshot_from_report(const pb::AuditReport& report) {
     r.clash.point_b = vec(c.point_b());
     r.clash.contacts = c.contact_pairs();
     r.clash.depth_mm = c.depth_mm();
-    r.clash.depth_direction = vec(c.depth_direction());
+    r.clash.depth_direction = Direction::of(vec(c.depth_direction()));
     r.clash.volume_mm3 = c.volume_mm3();
     r.clash.volume_error_bound_mm3 = c.volume_error_bound_mm3();
-    for (const pb::ClashRegion& q : c.regions())
-      r.clash.regions.push_back({vec(q.point()), Aabb{vec(q.bounds_min()), vec(q.bounds_max())}, q.contact_pairs(), q.min_distance_mm()});
+    // Archives written before 0.2 hold only the older ClashRegion (no point on B: the point on A).
+    for (const pb::ContactRegion& q : c.contact_regions())
+      r.clash.regions.push_back({q.min_distance_mm(), vec(q.point_a()), vec(q.point_b()), q.triangle_pairs(),
+                                 Aabb{vec(q.bounds_min()), vec(q.bounds_max())}, {}, {}});
+    if (c.contact_regions().empty())
+      for (const pb::ClashRegion& q : c.regions())
+        r.clash.regions.push_back({q.min_distance_mm(), vec(q.point()), vec(q.point()), q.contact_pairs(),
+                                   Aabb{vec(q.bounds_min()), vec(q.bounds_max())}, {}, {}});
     s.clashes.push_back(std::move(r));
   }
   return s;

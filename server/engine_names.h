@@ -7,7 +7,6 @@ namespace gk::server {
 
 using engine::AuditedObject;
 using engine::AuditOptions;
-using engine::ClashRegion;
 using engine::PairClash;
 using engine::AuditJob;
 using engine::AuditSnapshot;

@@ -135,6 +135,28 @@ void to_proto(const Vec3& v, pb::Vec3* out) {
   out->set_z_mm(v.z());
 }
 
+void to_proto(const Direction& d, pb::Direction* out) {
+  out->set_x(d.x());
+  out->set_y(d.y());
+  out->set_z(d.z());
+}
+
+void to_proto(const Direction& d, pb::Direction* out, pb::Vec3* old_field) {
+  to_proto(d, out);
+  to_proto(d.vector(), old_field);
+}
+
+void to_proto(const engine::ContactPlace& place, pb::ContactRegion* out) {
+  out->set_min_distance_mm(place.min_distance_mm);
+  to_proto(place.point_a, out->mutable_point_a());
+  to_proto(place.point_b, out->mutable_point_b());
+  out->set_triangle_pairs(place.triangle_pairs);
+  to_proto(place.bounds.min, out->mutable_bounds_min());
+  to_proto(place.bounds.max, out->mutable_bounds_max());
+  for (int f : place.faces_a) out->add_faces_a(static_cast<std::uint32_t>(f));
+  for (int f : place.faces_b) out->add_faces_b(static_cast<std::uint32_t>(f));
+}
+
 void to_proto(const p4::MachineState& s, pb::MachineState* out) {
   out->clear_engaged_segments();
   for (bool e : s.engaged_segments) out->add_engaged_segments(e);
@@ -218,6 +240,7 @@ void to_proto(const p4::StepAnswer& a, pb::ValidateStepResponse* out) {
     to_proto(c.point_mm, col->mutable_point());
     to_proto(c.organ_point_mm, col->mutable_organ_point());
     to_proto(c.normal, col->mutable_normal());
+    if (const auto normal = Direction::of(c.normal)) to_proto(*normal, col->mutable_normal_direction());
     col->set_depth_mm(c.depth_mm);
     col->set_first_contact_deg(c.first_contact_deg);
     col->set_first_contact_fraction(c.first_contact_fraction);
@@ -362,6 +385,13 @@ Result<engine::ClearanceRequest> to_clearance_request(const pb::ClearanceQueryRe
   out.region_merge_mm = in.region_merge_mm();
   out.compute_depth = in.compute_depth();
   out.depth_along = Vec3(in.depth_along().x_mm(), in.depth_along().y_mm(), in.depth_along().z_mm());
+  if (in.has_depth_along_direction()) {
+    const pb::Direction& d = in.depth_along_direction();
+    if (in.has_depth_along()) return invalid_argument("depth_along_direction", "give depth_along or depth_along_direction, not both");
+    const auto along = Direction::of(Vec3(d.x(), d.y(), d.z()));
+    if (!along) return invalid_argument("depth_along_direction", "must be a finite, non-zero vector");
+    out.depth_along = along->vector();
+  }
   out.compute_volume = in.compute_volume();
   return out;
 }
@@ -382,20 +412,10 @@ void to_proto(const engine::ClearanceResult& r, pb::ClearanceQueryResponse* out)
   out->set_error_bound_mm(r.error_bound_mm);
   out->set_pairs_within_gap(r.pairs_within_gap);
   out->set_pairs_truncated(r.pairs_truncated);
-  for (const engine::ClearanceRegion& region : r.regions) {
-    pb::ContactRegion* o = out->add_regions();
-    o->set_min_distance_mm(region.min_distance_mm);
-    to_proto(region.point_a, o->mutable_point_a());
-    to_proto(region.point_b, o->mutable_point_b());
-    o->set_triangle_pairs(region.triangle_pairs);
-    to_proto(region.bounds.min, o->mutable_bounds_min());
-    to_proto(region.bounds.max, o->mutable_bounds_max());
-    for (int f : region.faces_a) o->add_faces_a(static_cast<std::uint32_t>(f));
-    for (int f : region.faces_b) o->add_faces_b(static_cast<std::uint32_t>(f));
-  }
+  for (const engine::ContactPlace& place : r.regions) to_proto(place, out->add_regions());
   out->set_gap_violated(r.gap_violated);
   out->set_depth_mm(r.depth_mm);
-  if (r.depth_direction != Vec3::Zero()) to_proto(r.depth_direction, out->mutable_depth_direction());
+  if (r.depth_direction) to_proto(*r.depth_direction, out->mutable_depth_axis(), out->mutable_depth_direction());
   out->set_depth_exact(r.depth_exact);
   out->set_depth_method(r.depth_method);
   out->set_depth_method_kind(to_proto(r.depth_method_kind));

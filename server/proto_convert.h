@@ -30,6 +30,10 @@ void to_proto(const MoveOutcome& outcome, pb::MoveResult* out);
 void to_proto(const p4::MachineState& state, pb::MachineState* out);
 void to_proto(const p4::BendStep& step, pb::Step* out);
 void to_proto(const Vec3& v, pb::Vec3* out);
+void to_proto(const Direction& d, pb::Direction* out);
+// A direction in both fields of an answer: the Direction, and the older Vec3 beside it.
+void to_proto(const Direction& d, pb::Direction* out, pb::Vec3* old_field);
+void to_proto(const engine::ContactPlace& place, pb::ContactRegion* out);
 void to_proto(const PartRecord& record, pb::PartInfo* out);
 
 pb::Verdict to_proto(Verdict v);

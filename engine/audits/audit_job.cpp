@@ -128,12 +128,12 @@ void AuditJob::run(PartRegistry& parts, std::function<void(const AuditSnapshot&)
       r.reason = v.result.reason;
       if (v.result.verdict != Verdict::kCollision) {
         r.clash.depth_mm = -1.0;
-        r.clash.depth_direction = Vec3::Zero();
+        r.clash.depth_direction.reset();
       } else if (options_.compute_depth && (parts_of[c.a]->is_cad() || parts_of[c.b]->is_cad())) {
         // The triangles' depth frees the tessellations, not the solids: checked (and extended) on
         // the exact faces as ClearanceQuery does; along the centres' line when the triangles are free.
         const engine::PosedPart pa{parts_of[c.a].get(), objects[c.a].pose}, pb_{parts_of[c.b].get(), objects[c.b].pose};
-        Vec3 direction = r.clash.depth_direction;
+        Vec3 direction = r.clash.depth_direction ? r.clash.depth_direction->vector() : Vec3::Zero();
         double depth = std::max(r.clash.depth_mm, 0.0);
         if (!(depth > 0.0) || !(direction.norm() > 0.0)) {
           direction = transformed_box(pb_.part->mesh->bounds(), pb_.pose).center() - transformed_box(pa.part->mesh->bounds(), pa.pose).center();
@@ -144,7 +144,7 @@ void AuditJob::run(PartRegistry& parts, std::function<void(const AuditSnapshot&)
         const StopToken stop([this] { return cancelled_.load(); });
         auto checked = engine::check_depth_on_brep(pa, pb_, direction, depth, stop);
         r.clash.depth_mm = checked.ok() ? checked.value().depth_mm : -1.0;  // -1: not certified
-        r.clash.depth_direction = checked.ok() ? direction : Vec3::Zero();
+        r.clash.depth_direction = checked.ok() ? Direction::of(direction) : std::nullopt;
       }
       out = r;
     }

@@ -40,13 +40,6 @@ void parallel_for(std::size_t n, int threads, Body&& body) {
   for (std::thread& t : pool) t.join();
 }
 
-std::vector<ClashRegion> regions_of(const std::vector<ProximityPair>& pairs, double merge_mm) {
-  std::vector<ClashRegion> out;
-  for (const ContactRegion& r : group_into_regions(pairs, merge_mm))
-    out.push_back({r.point_a, r.bounds, static_cast<unsigned>(r.pairs.size()), r.min_distance_mm});
-  return out;
-}
-
 // The narrow phase of one pair; false when the pair is neither in contact nor too close.
 bool audit_pair(const AuditObject& oa, const AuditObject& ob, const AuditOptions& options, PairClash& out) {
   VerdictOptions vo;
@@ -75,20 +68,20 @@ bool audit_pair(const AuditObject& oa, const AuditObject& ob, const AuditOptions
     for (const Contact& c : r.contacts) pairs.push_back({c.triangle_a, c.triangle_b, 0.0, c.point, c.point});
     out.contacts = static_cast<unsigned>(r.contacts.size());
     out.contacts_truncated = r.contacts_truncated;
-    out.regions = regions_of(pairs, options.region_merge_mm);
+    out.regions = contact_places(pairs, options.region_merge_mm);
   } else {
     auto near = pairs_within(*oa.mesh, oa.pose, *ob.mesh, ob.pose, options.clearance_mm, options.max_contacts_per_pair);
     if (near.ok()) {
       out.contacts = static_cast<unsigned>(near.value().pairs.size());
       out.contacts_truncated = near.value().truncated;
-      out.regions = regions_of(near.value().pairs, options.region_merge_mm);
+      out.regions = contact_places(near.value().pairs, options.region_merge_mm);
     }
   }
   if (options.compute_depth && r.verdict == Verdict::kCollision) {
     auto depth = penetration_vector(*oa.mesh, oa.pose, *ob.mesh, ob.pose, kAuditDepthDirections, tolerances::kAuditDepthResolutionMm);
     if (depth.ok()) {
       out.depth_mm = depth.value().depth_mm;
-      out.depth_direction = depth.value().direction;
+      out.depth_direction = Direction::of(depth.value().direction);
     }
   }
   if (options.compute_volume && r.verdict == Verdict::kCollision && oa.mesh->mesh().is_closed_oriented() &&

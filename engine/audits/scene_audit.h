@@ -13,6 +13,8 @@
 // Results are in pair order whatever the tiling or thread count, so runs are reproducible.
 #pragma once
 
+#include "kernel/core/direction.h"
+#include "engine/verdicts/contact_place.h"
 #include "kernel/query/contact_verdict.h"
 #include "kernel/bvh/mesh_bvh.h"
 #include "kernel/core/rigid_transform.h"
@@ -21,6 +23,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <optional>
 #include <vector>
 
 namespace gk::engine {
@@ -50,13 +53,6 @@ struct ContactRule {
   bool same_group_only = false;        // only when both objects belong to the same (non-empty) group
 };
 
-struct ClashRegion {
-  Vec3 point = Vec3::Zero();  // a representative contact point (world)
-  Aabb bounds;                // of the region's contact points
-  unsigned contacts = 0;      // triangle pairs in it
-  double min_distance_mm = 0.0;
-};
-
 struct PairClash {
   std::uint32_t a = 0, b = 0;  // object indices, a < b
   Verdict verdict = Verdict::kClear;
@@ -64,11 +60,11 @@ struct PairClash {
   double distance_mm = 0.0;    // 0 when in contact
   bool clearance_violation = false;  // apart, but closer than the gap
   Vec3 point_a = Vec3::Zero(), point_b = Vec3::Zero();
-  std::vector<ClashRegion> regions;
+  std::vector<ContactPlace> regions;  // contact locations grouped
   unsigned contacts = 0;
   bool contacts_truncated = false;
   double depth_mm = -1.0;      // on request, for collisions: certified upper bound (kernel/measure/penetration_depth)
-  Vec3 depth_direction = Vec3::Zero();
+  std::optional<Direction> depth_direction;  // with depth_mm
   double volume_mm3 = -1.0;    // on request, for collisions of closed meshes: ray-cast shared volume
   double volume_error_bound_mm3 = -1.0;  // |volume_mm3 - true volume| <= this
   std::string error;           // the pair could not be decided (then verdict INCONCLUSIVE)

@@ -62,12 +62,7 @@ Result<PosedSide> resolve(const ClearanceSide& in, const std::string& side, Part
 void add_regions(const std::vector<ProximityPair>& pairs, double merge_mm, const PosedSide& a, const PosedSide& b,
                  ClearanceResult& result) {
   for (const ContactRegion& r : group_into_regions(pairs, merge_mm)) {
-    ClearanceRegion out;
-    out.min_distance_mm = r.min_distance_mm;
-    out.point_a = r.point_a;
-    out.point_b = r.point_b;
-    out.triangle_pairs = static_cast<std::uint32_t>(r.pairs.size());
-    out.bounds = r.bounds;
+    ContactPlace out = place_of(r);
     std::set<int> faces_a, faces_b;
     for (const ProximityPair& p : r.pairs) {
       if (a.is_cad()) faces_a.insert(a.part->face_of_triangle[p.triangle_a]);
@@ -131,7 +126,7 @@ std::string add_depth(const PosedSide& a, const PosedSide& b, const Vec3& along,
     method += "; checked clear on the exact faces" +
                 (checked.value().added_mm > 0.0 ? " after adding " + number_text(checked.value().added_mm) + " mm" : std::string());
   }
-  result.depth_direction = direction;
+  result.depth_direction = Direction::of(direction);
   result.depth_mm = checked.value().depth_mm;
   result.depth_exact = exact;
   result.depth_method = method;

@@ -4,6 +4,8 @@
 // (engine/verdicts/pair_verdict).
 #pragma once
 
+#include "kernel/core/direction.h"
+#include "engine/verdicts/contact_place.h"
 #include "engine/parts/part_registry.h"
 #include "engine/scenes/scene_store.h"
 #include "kernel/core/aabb.h"
@@ -12,6 +14,7 @@
 
 #include <cstdint>
 #include <string>
+#include <optional>
 #include <vector>
 
 namespace gk::engine {
@@ -50,15 +53,6 @@ enum class SharedVolumeMethod {
   kMeshRayCast,            // a ray-cast grid with a proven bound
 };
 
-// The pairs closer than the gap, grouped.
-struct ClearanceRegion {
-  double min_distance_mm = 0.0;
-  Vec3 point_a = Vec3::Zero(), point_b = Vec3::Zero();
-  std::uint32_t triangle_pairs = 0;
-  Aabb bounds;                       // of the region's witnesses on A
-  std::vector<int> faces_a, faces_b;  // CAD parts: the B-Rep faces (1-based) of its triangles
-};
-
 // Figures that were not computed keep these defaults; a measure asked for and not certified is
 // -1 with the reason in not_computed.
 struct ClearanceResult {
@@ -74,11 +68,11 @@ struct ClearanceResult {
   double error_bound_mm = 0.0;                   // |distance_mm - true distance| <= this
   std::uint32_t pairs_within_gap = 0;
   bool pairs_truncated = false;
-  std::vector<ClearanceRegion> regions;
+  std::vector<ContactPlace> regions;  // the pairs closer than the gap, grouped
   bool gap_violated = false;
   // Depth (COLLISION, on request): B moved by depth_mm along depth_direction is free.
   double depth_mm = 0.0;
-  Vec3 depth_direction = Vec3::Zero();
+  std::optional<Direction> depth_direction;
   bool depth_exact = false;
   DepthMethod depth_method_kind = DepthMethod::kNone;
   std::string depth_method;  // the same in words, with what it took

@@ -4,6 +4,7 @@
 // service is also tested through the real daemon on loopback (gatekeeperd_e2e_tests).
 #include "engine/gatekeeper_engine.h"
 #include "server/audit_archive.h"
+#include "server/audit_report.h"
 #include "server/gatekeeper_service.h"
 #include "tests/server/daemon_fixture.h"
 #include "kernel/core/units.h"
@@ -368,6 +369,115 @@ TEST(ServiceInProcess, AnAuditIsStartedWatchedReportedAndCancelled) {
   pb::AuditProgress nothing;
   EXPECT_FALSE(reader->Read(&nothing));
   EXPECT_EQ(reader->Finish().error_code(), grpc::StatusCode::NOT_FOUND);
+}
+
+// The 0.2 additions: directions as Direction (unit, beside the older Vec3), one region message
+// for clearance queries and audits, and enum values with their enum's prefix.
+TEST(ServiceInProcess, DirectionsAndRegionsComeInTheirOwnMessagesBesideTheOlderFields) {
+  InProcessService s("directions");
+  static_assert(pb::VERDICT_COLLISION == pb::COLLISION && pb::AUDIT_STATE_DONE == pb::DONE, "aliases share values");
+  pb::PartInfo info;
+  ASSERT_TRUE(testing::upload_part(s.stub(), testing::box_obj(0, 0, 0, 100, 100, 100), "obj", &info).ok());
+  // B overlaps A by 2 mm in x and 3 mm in y: freed by 2 mm along +x (the smallest move).
+  pb::ClearanceQueryRequest q;
+  q.mutable_a()->set_part_id(info.part_id());
+  *q.mutable_a()->mutable_pose() = at(0.0, 0.0, 0.0);
+  q.mutable_b()->set_part_id(info.part_id());
+  *q.mutable_b()->mutable_pose() = at(98.0, 97.0, 0.0);
+  q.set_compute_depth(true);
+  pb::ClearanceQueryResponse free;
+  ASSERT_TRUE(s.stub().ClearanceQuery(context().get(), q, &free).ok());
+  ASSERT_EQ(free.verdict(), pb::VERDICT_COLLISION);
+  ASSERT_TRUE(free.has_depth_axis());
+  const pb::Direction& axis = free.depth_axis();
+  EXPECT_NEAR(std::sqrt(axis.x() * axis.x() + axis.y() * axis.y() + axis.z() * axis.z()), 1.0, 1e-12);
+  EXPECT_DOUBLE_EQ(axis.x(), free.depth_direction().x_mm());
+  EXPECT_DOUBLE_EQ(axis.y(), free.depth_direction().y_mm());
+  EXPECT_NEAR(free.depth_mm(), 2.0, 1e-3);
+  // Along a requested direction, given as a Direction not of unit length: normalised, the same
+  // answer as the older Vec3 field.
+  q.mutable_depth_along_direction()->set_y(5.0);
+  pb::ClearanceQueryResponse along_y;
+  ASSERT_TRUE(s.stub().ClearanceQuery(context().get(), q, &along_y).ok());
+  EXPECT_NEAR(along_y.depth_mm(), 3.0, 1e-3);
+  EXPECT_EQ(along_y.depth_method_kind(), pb::DEPTH_METHOD_ALONG_REQUESTED);
+  EXPECT_NEAR(along_y.depth_axis().y(), 1.0, 1e-12);
+  q.mutable_depth_along()->set_y_mm(1.0);  // both: refused, naming the new field
+  pb::ClearanceQueryResponse refused_answer;
+  grpc::Status refused = s.stub().ClearanceQuery(context().get(), q, &refused_answer);
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(refused.error_message().find("depth_along_direction"), std::string::npos) << refused.error_message();
+  q.clear_depth_along();
+  q.mutable_depth_along_direction()->set_y(0.0);
+  refused = s.stub().ClearanceQuery(context().get(), q, &refused_answer);
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(refused.error_message().find("depth_along_direction"), std::string::npos) << refused.error_message();
+
+  // An audit of the same two boxes: its clash's regions in the ContactRegion message, the same
+  // places as the older ClashRegion list, and its depth direction as a Direction.
+  pb::SceneInfo scene;
+  ASSERT_TRUE(s.stub().CreateScene(context().get(), pb::CreateSceneRequest(), &scene).ok());
+  pb::PutObjectsRequest batch;
+  batch.set_scene_id(scene.scene_id());
+  for (const pb::Pose& pose : {at(0.0, 0.0, 0.0), at(98.0, 97.0, 0.0)}) {
+    pb::SceneObject* o = batch.add_objects();
+    o->set_part_id(info.part_id());
+    *o->mutable_pose() = pose;
+  }
+  pb::PutObjectsResponse stored;
+  ASSERT_TRUE(s.stub().PutObjects(context().get(), batch, &stored).ok());
+  pb::StartAuditRequest start;
+  start.set_scene_id(scene.scene_id());
+  start.set_compute_depth(true);
+  const pb::AuditReport report = testing::run_audit(s.stub(), start);
+  ASSERT_EQ(report.clashes_size(), 1);
+  const pb::Clash& clash = report.clashes(0);
+  EXPECT_EQ(clash.verdict(), pb::VERDICT_COLLISION);
+  ASSERT_GT(clash.contact_regions_size(), 0);
+  ASSERT_EQ(clash.contact_regions_size(), clash.regions_size());
+  for (int r = 0; r < clash.regions_size(); ++r) {
+    const pb::ContactRegion& place = clash.contact_regions(r);
+    EXPECT_EQ(place.triangle_pairs(), clash.regions(r).contact_pairs());
+    EXPECT_DOUBLE_EQ(place.point_a().x_mm(), clash.regions(r).point().x_mm());
+    // Every witness lies in the 2 x 3 x 100 mm overlap of the boxes (within rounding).
+    for (const pb::Vec3& p : {place.point_a(), place.point_b()}) {
+      EXPECT_GE(p.x_mm(), 98.0 - 1e-9);
+      EXPECT_LE(p.x_mm(), 100.0 + 1e-9);
+      EXPECT_GE(p.y_mm(), 97.0 - 1e-9);
+      EXPECT_LE(p.y_mm(), 100.0 + 1e-9);
+    }
+  }
+  ASSERT_TRUE(clash.has_depth_axis());
+  EXPECT_DOUBLE_EQ(clash.depth_axis().x(), clash.depth_direction().x_mm());
+}
+
+// An audit archived before 0.2 holds its regions only as ClashRegion: read back, each becomes a
+// contact place (its point on both sides), and a report written again carries both messages.
+TEST(ServiceInProcess, AnArchivedReportOfTheOlderRegionMessageReadsBackAsContactPlaces) {
+  pb::AuditReport old;
+  pb::Clash* clash = old.add_clashes();
+  clash->set_object_a("a");
+  clash->set_object_b("b");
+  clash->set_verdict(pb::COLLISION);
+  pb::ClashRegion* region = clash->add_regions();
+  region->mutable_point()->set_x_mm(7.0);
+  region->set_contact_pairs(12);
+  region->set_min_distance_mm(0.0);
+  region->mutable_bounds_max()->set_x_mm(9.0);
+  const AuditSnapshot snapshot = snapshot_from_report(old);
+  ASSERT_EQ(snapshot.clashes.size(), 1u);
+  ASSERT_EQ(snapshot.clashes[0].clash.regions.size(), 1u);
+  const engine::ContactPlace& place = snapshot.clashes[0].clash.regions[0];
+  EXPECT_EQ(place.triangle_pairs, 12u);
+  EXPECT_EQ(place.point_a.x(), 7.0);
+  EXPECT_EQ(place.point_b.x(), 7.0);
+  EXPECT_EQ(place.bounds.max.x(), 9.0);
+  pb::AuditReport again;
+  report_to_proto(snapshot, &again);
+  ASSERT_EQ(again.clashes(0).contact_regions_size(), 1);
+  ASSERT_EQ(again.clashes(0).regions_size(), 1);
+  EXPECT_EQ(again.clashes(0).contact_regions(0).triangle_pairs(), 12u);
+  EXPECT_EQ(again.clashes(0).regions(0).point().x_mm(), 7.0);
 }
 
 TEST(ServiceInProcess, GetServerInfoCountsTheCallsItServed) {
