@@ -92,13 +92,20 @@ Result<PlacedMove> Engine::put_object(const std::string& scene_id, SceneObjectRe
                                       const StopToken& stop) {
   if (auto bad = check_object(object, "object"); !bad.ok()) return bad.error();
   if (auto bad = check_clearance(clearance_mm); !bad.ok()) return bad.error();
-  auto stored = scenes_.put(scene_id, std::move(object));
-  if (!stored.ok()) return stored.error();
-  // Stored once; then the new object's contacts, as a move would answer them.
+  // The answer is decided before the object is stored, for the object as asked: a put that fails
+  // (a deadline, a cancel) stores nothing, and a concurrent edit of the same object cannot change
+  // what this answer describes (it once did: another client's pose answered for this one).
   auto scene = scenes_.get(scene_id);
   if (!scene.ok()) return scene.error();
-  auto outcome = DragSession::once(scene.value(), stored.value().id, clearance_mm, parts_, stop);
+  // A new object has no id yet: a key no client id can be (ids never hold control characters).
+  const std::string key = object.id.empty() ? std::string("\x01new object") : object.id;
+  SceneObjectRecord asked = object;
+  asked.id = key;
+  scene.value().objects[key] = asked;
+  auto outcome = DragSession::once(scene.value(), key, clearance_mm, parts_, stop);
   if (!outcome.ok()) return outcome.error();
+  auto stored = scenes_.put(scene_id, std::move(object));
+  if (!stored.ok()) return stored.error();
   return PlacedMove{stored.value().id, std::move(outcome).value()};
 }
 
@@ -120,17 +127,31 @@ Result<MoveOutcome> Engine::move_object(const std::string& scene_id, const std::
   if (!checked.ok()) return checked.error();
   const StoredPose& pose = checked.value();
   if (auto bad = check_clearance(clearance_mm); !bad.ok()) return bad.error();
+  if (!drag) {
+    // Decided before the pose is stored, at the pose asked (see put_object): a move that fails
+    // stores nothing, and a concurrent move of the same object cannot answer for this one.
+    auto scene = scenes_.get(scene_id);
+    if (!scene.ok()) return scene.error();
+    auto self = scene.value().objects.find(object_id);
+    if (self == scene.value().objects.end()) return Error{ErrorCode::kNotFound, "object_id", "no object '" + object_id + "'"};
+    self->second.pose = pose;
+    auto outcome = DragSession::once(scene.value(), object_id, clearance_mm, parts_, stop);
+    if (!outcome.ok()) return outcome.error();
+    auto moved = scenes_.move(scene_id, object_id, pose);
+    if (!moved.ok()) return moved.error();
+    return outcome;
+  }
+  // A drag's frame is stored first: its session stays valid while the scene's version advances
+  // by this stream's own moves only (engine/scenes/drag_session). A frame that fails after its
+  // pose is stored leaves the pose stored (the next frame replaces it).
   auto moved = scenes_.move(scene_id, object_id, pose);
   if (!moved.ok()) return moved.error();
-  if (drag) {
+  {
     auto version = scenes_.version(scene_id);
     if (!version.ok()) return version.error();
     return drag->move(scene_id, version.value(), [&] { return scenes_.get(scene_id); }, object_id, clearance_mm,
                       pose.transform(), parts_, stop);
   }
-  auto scene = scenes_.get(scene_id);
-  if (!scene.ok()) return scene.error();
-  return DragSession::once(scene.value(), object_id, clearance_mm, parts_, stop);
 }
 
 Result<SceneRecord> Engine::delete_object(const std::string& scene_id, const std::string& object_id) {

@@ -61,13 +61,15 @@ class Engine {
   // --- scenes
   Result<SceneRecord> create_scene(const std::string& name);
   Result<SceneRecord> scene(const std::string& scene_id) const { return scenes_.get(scene_id); }
-  // Stores the object (an empty id gets a new one), then answers its contacts as a move would.
+  // Answers the object's contacts as a move would, then stores it (an empty id gets a new one);
+  // nothing is stored when the answer fails.
   Result<PlacedMove> put_object(const std::string& scene_id, SceneObjectRecord object, double clearance_mm,
                                 const StopToken& stop = {});
   // All or nothing: every object is checked (fields named objects[i]...) before any is stored.
   Result<std::vector<SceneObjectRecord>> put_objects(const std::string& scene_id, std::vector<SceneObjectRecord> objects);
   // Poses are checked here (engine::checked_pose), whoever calls.
-  // Stores the new pose, then answers the contacts (through the drag's session when there is one).
+  // Answers the contacts at the pose asked, then stores it (nothing stored when the answer fails);
+  // a drag's frame (through its session) is stored first.
   Result<MoveOutcome> move_object(const std::string& scene_id, const std::string& object_id, const StoredPose& pose,
                                   double clearance_mm, DragSession* drag = nullptr, const StopToken& stop = {});
   Result<SceneRecord> delete_object(const std::string& scene_id, const std::string& object_id);

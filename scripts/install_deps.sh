@@ -27,9 +27,8 @@ PACKAGES=(
   # service
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler grpc-proto
   libspdlog-dev libfmt-dev libsqlite3-dev nlohmann-json3-dev libcli11-dev libssl-dev
-  # /metrics over HTTP (cpp-httplib, a compiled library; its header includes zlib's and brotli's),
-  # and the test's independent reader of the Prometheus text format
-  libcpp-httplib-dev zlib1g-dev libbrotli-dev python3-prometheus-client
+  # the tests' independent reader of /metrics (the Prometheus text format)
+  python3-prometheus-client
   # the access tests make their TLS certificates with the openssl command
   openssl
   # scripts/check_container.sh lints the container's entrypoint and health check

@@ -4,6 +4,7 @@
 #include "server/request_log.h"
 
 #include <atomic>
+#include <chrono>
 #include <cstdio>
 #include <iterator>
 #include <vector>
@@ -25,9 +26,19 @@ bool sane_request_id(const std::string& id) {
   return true;
 }
 
+// "gk-<this process's start, ms since the epoch, hex>-<count>": unique across restarts too (a
+// log file is appended to by every run).
 std::string new_request_id() {
+  static const std::string prefix = [] {
+    char hex[32];
+    std::snprintf(hex, sizeof hex, "gk-%llx-",
+                  static_cast<unsigned long long>(std::chrono::duration_cast<std::chrono::milliseconds>(
+                                                      std::chrono::system_clock::now().time_since_epoch())
+                                                      .count()));
+    return std::string(hex);
+  }();
   static std::atomic<unsigned long long> counter{0};
-  return "gk-" + std::to_string(++counter);
+  return prefix + std::to_string(++counter);
 }
 
 const char* status_code_name(grpc::StatusCode code) {

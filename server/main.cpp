@@ -39,6 +39,7 @@
 #include <filesystem>
 #include <fstream>
 #include <pthread.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 
 namespace {
@@ -154,6 +155,15 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.5, 1024.0));
   CLI11_PARSE(app, argc, argv);
   if (!config_file.empty() && !apply_config_file(config_file, config, app)) return 2;
+  ::umask(077);
+  {
+    // Every connection and part file takes a descriptor: the soft limit (often 1024) up to the hard one.
+    rlimit files{};
+    if (::getrlimit(RLIMIT_NOFILE, &files) == 0 && files.rlim_cur < files.rlim_max) {
+      files.rlim_cur = files.rlim_max;
+      ::setrlimit(RLIMIT_NOFILE, &files);
+    }
+  }
   {
     // The CAD readers run first in a child: this very program, found by its own path.
     std::error_code ec;
@@ -198,8 +208,8 @@ int main(int argc, char** argv) {
     spdlog::error("{}", credentials.error().to_string());
     return 2;
   }
-  // Parts, scenes and reports are the customer's: nothing this daemon writes is readable by others.
-  ::umask(077);
+  // Parts, scenes and reports are the customer's: nothing this daemon writes is readable by others
+  // (umask set before the log file is opened).
   ::mkdir(config.data_dir.c_str(), 0700);
   ::chmod(config.data_dir.c_str(), 0700);
   {

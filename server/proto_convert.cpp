@@ -19,7 +19,15 @@ Result<bool> finite(double v, const std::string& field) {
 }  // namespace
 
 grpc::Status to_status(const Error& error) {
-  const std::string message = error.to_string();
+  // Messages quote what the client sent (an id, a name): a client's 20 KB id quoted back would
+  // exceed the client's own metadata limit and arrive as RESOURCE_EXHAUSTED instead of the error.
+  constexpr std::size_t kMaxMessageBytes = 1024;
+  std::string message = error.to_string();
+  if (message.size() > kMaxMessageBytes) {
+    std::size_t cut = kMaxMessageBytes;
+    while (cut > 0 && (static_cast<unsigned char>(message[cut]) & 0xC0) == 0x80) --cut;  // not inside a UTF-8 character
+    message = message.substr(0, cut) + "... (" + std::to_string(message.size()) + " bytes)";
+  }
   switch (error.code) {
     case ErrorCode::kInvalidArgument: return {grpc::StatusCode::INVALID_ARGUMENT, message};
     case ErrorCode::kNotFound: return {grpc::StatusCode::NOT_FOUND, message};

@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cstdio>
 #include <ctime>
+#include <filesystem>
 #include <memory>
 
 namespace gk::server {
@@ -107,17 +108,24 @@ std::optional<std::string> configure_logging(const LogOptions& options) {
   const spdlog::level::level_enum level = spdlog::level::from_str(options.level);
   if (level == spdlog::level::off && options.level != "off")
     return "--log-level: \"" + options.level + "\" is not one of trace, debug, info, warn, error, critical, off";
-  // Each logger gets its own sink (a formatter belongs to a sink); both write whole lines.
-  const auto make_sink = [&]() -> spdlog::sink_ptr {
-    if (options.file.empty()) return std::make_shared<spdlog::sinks::stderr_sink_mt>();
-    return std::make_shared<spdlog::sinks::basic_file_sink_mt>(options.file);
-  };
+  if (!options.file.empty()) {
+    // The directory must exist (spdlog would create it): a mistyped path is an error, not a tree.
+    const std::filesystem::path parent = std::filesystem::path(options.file).parent_path();
+    std::error_code ec;
+    if (!parent.empty() && !std::filesystem::is_directory(parent, ec))
+      return "--log-file: the directory " + parent.string() + " does not exist";
+  }
   try {
-    auto main_logger = std::make_shared<spdlog::logger>("", make_sink());
-    auto call_logger = std::make_shared<spdlog::logger>(kCallLogger, make_sink());
+    // One sink for both loggers: its lock keeps every line whole (two sinks on one file
+    // interleaved the pieces of long lines), and its one formatter knows call lines by logger.
+    spdlog::sink_ptr sink;
+    if (options.file.empty()) sink = std::make_shared<spdlog::sinks::stderr_sink_mt>();
+    else sink = std::make_shared<spdlog::sinks::basic_file_sink_mt>(options.file);
+    if (options.format == LogFormat::kJson) sink->set_formatter(std::make_unique<JsonLineFormatter>());
+    auto main_logger = std::make_shared<spdlog::logger>("", sink);
+    auto call_logger = std::make_shared<spdlog::logger>(kCallLogger, sink);
     for (auto* logger : {main_logger.get(), call_logger.get()}) {
       logger->set_level(level);
-      if (options.format == LogFormat::kJson) logger->set_formatter(std::make_unique<JsonLineFormatter>());
       logger->flush_on(spdlog::level::info);
     }
     spdlog::drop(kCallLogger);

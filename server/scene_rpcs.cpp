@@ -29,7 +29,9 @@ class DragReactor final : public grpc::ServerBidiReactor<pb::MoveObjectRequest, 
     StartRead(&request_);
   }
   void OnReadDone(bool ok) override {
-    if (!ok) return end(grpc::Status::OK);  // the client is done dragging
+    if (!ok) {  // the client is done dragging, or gone
+      return end(ctx_->IsCancelled() ? grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the client") : grpc::Status::OK);
+    }
     const Call frame = begin_frame(call_, "DragObject.move");
     const bool queued = service_.scene_pool().try_submit([this, frame] { answer_frame(frame); });
     if (!queued) {
@@ -46,7 +48,10 @@ class DragReactor final : public grpc::ServerBidiReactor<pb::MoveObjectRequest, 
  private:
   // On a scene worker: the frame's move and contacts, then its reply (or the stream's end).
   void answer_frame(const Call& frame) {
-    if (ctx_->IsCancelled()) return end({grpc::StatusCode::CANCELLED, "cancelled by the client"});
+    if (ctx_->IsCancelled()) {
+      service_.stats().record(frame.method, us_since(frame.t0), true);
+      return end({grpc::StatusCode::CANCELLED, "cancelled by the client"});
+    }
     reply_.Clear();
     const StopToken stop([this] { return ctx_->IsCancelled() || past_deadline(ctx_); });
     const grpc::Status s = guarded_status(frame, [&] { return service_.move(request_, &reply_, &session_, stop); });
@@ -76,12 +81,12 @@ SceneObjectRecord to_record(const pb::SceneObject& in) {
 // write is in flight is coalesced into one write of the latest state when that write completes.
 class WatchReactor final : public grpc::ServerWriteReactor<pb::AuditProgress> {
  public:
-  WatchReactor(std::shared_ptr<AuditJob> job, std::string job_id) : job_(std::move(job)), id_(std::move(job_id)) {
+  WatchReactor(std::shared_ptr<AuditJob> job, std::string job_id, RpcStats& stats, Call call)
+      : job_(std::move(job)), id_(std::move(job_id)), stats_(stats), call_(std::move(call)) {
     std::lock_guard<std::recursive_mutex> lock(mutex_);
     token_ = job_->subscribe([this] { on_change(); });
     if (token_ == 0) {
-      finished_ = true;
-      Finish({grpc::StatusCode::RESOURCE_EXHAUSTED, "too many watchers of this audit: retry later"});
+      finish({grpc::StatusCode::RESOURCE_EXHAUSTED, "too many watchers of this audit: retry later"});
       return;
     }
     write_latest();
@@ -131,11 +136,14 @@ class WatchReactor final : public grpc::ServerWriteReactor<pb::AuditProgress> {
   }
   void finish(const grpc::Status& status) {
     finished_ = true;
+    end_call(stats_, call_, status);
     Finish(status);
   }
 
   std::shared_ptr<AuditJob> job_;
   std::string id_;
+  RpcStats& stats_;
+  const Call call_;
   std::uint64_t token_ = 0;
   std::recursive_mutex mutex_;  // a reaction may run inline from StartWrite
   bool writing_ = false, pending_ = false, finished_ = false, cancelled_ = false, written_ = false;
@@ -252,17 +260,16 @@ grpc::ServerUnaryReactor* GatekeeperService::StartAudit(grpc::CallbackServerCont
   }, response);
 }
 
-grpc::ServerWriteReactor<pb::AuditProgress>* GatekeeperService::WatchAudit(grpc::CallbackServerContext* /*ctx*/,
+grpc::ServerWriteReactor<pb::AuditProgress>* GatekeeperService::WatchAudit(grpc::CallbackServerContext* ctx,
                                                                           const pb::WatchAuditRequest* request) {
+  Call call = begin_call(ctx, "WatchAudit");
   auto job = engine_.audit(request->job_id());
   if (!job.ok()) {
-    struct Refused : grpc::ServerWriteReactor<pb::AuditProgress> {
-      explicit Refused(const grpc::Status& s) { Finish(s); }
-      void OnDone() override { delete this; }
-    };
-    return new Refused(to_status(job.error()));
+    const grpc::Status refused = to_status(job.error());
+    end_call(stats_, call, refused);
+    return new RefusedStream<grpc::ServerWriteReactor<pb::AuditProgress>>(refused);
   }
-  return new WatchReactor(job.value(), request->job_id());
+  return new WatchReactor(job.value(), request->job_id(), stats_, std::move(call));
 }
 
 grpc::ServerUnaryReactor* GatekeeperService::CancelAudit(grpc::CallbackServerContext* ctx, const pb::CancelAuditRequest* request,

@@ -146,6 +146,7 @@ Result<FrameAnswer> LayoutSession::move_to(const RigidTransform& pose, const Sto
     options.max_contacts = kFirstContacts;
     const double reach = clearance_mm_ + self.surface_deviation_mm + other.surface_deviation_mm;
     options.distance_upper_bound_mm = reach;
+    options.stop = &stop;  // one pair of large meshes can take seconds: the deadline reaches into it
     auto v = assess(*self.mesh, pose, *other.mesh, other.pose, options);
     if (!v.ok()) return v.error();  // assess decides over every pair; the cap is on the contacts listed
     const VerdictResult& r = v.value();

@@ -152,7 +152,9 @@ Result<std::shared_ptr<MeshBvh>> MeshBvh::build(std::shared_ptr<const TriangleMe
 
 namespace {
 
-constexpr char kSerialMagic[8] = {'G', 'K', 'B', 'V', 'H', '0', '0', '1'};
+// The format's version: 002 since trees have 4 triangles per leaf (a file of 001 holds a valid
+// tree of 1 per leaf, but is rebuilt rather than kept slower).
+constexpr char kSerialMagic[8] = {'G', 'K', 'B', 'V', 'H', '0', '0', '2'};
 
 template <typename T>
 void put(std::string& out, const T& value) {

@@ -4,7 +4,7 @@
 // distance on the non-colliding poses on a line of its own. Prints the whole table (mean and
 // median per query, ours / FCL / ratio FCL÷ours), each mesh's build rate and memory per
 // triangle, and a hash of our answers that must not change across optimisations.
-//   build/tests/benchmarks/kernel_fcl_table [poses per kind, default 200]
+//   build/tests/benchmarks/kernel_fcl_table [poses per kind, default 200] [triangles per leaf, default the kernel's]
 #include "kernel/bvh/mesh_bvh.h"
 #include "kernel/query/mesh_collision.h"
 #include "kernel/query/mesh_distance.h"
@@ -61,7 +61,7 @@ double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std
 
 // A mesh from the shared data, scaled so that its box diagonal is diagonal_mm and centred on the
 // origin (the same arrays go to both libraries).
-Subject load(const std::string& relative, double diagonal_mm) {
+Subject load(const std::string& relative, double diagonal_mm, int leaf_size) {
   const std::size_t heap0 = mallinfo2().uordblks;  // the mesh and its tree: what stays allocated after both
   auto read = gk::mesh_io::read_mesh_file(gk::testing::shared_data(relative));
   if (!read.ok()) {
@@ -78,7 +78,9 @@ Subject load(const std::string& relative, double diagonal_mm) {
   s.name = relative.substr(relative.rfind('/') + 1);
   s.mesh = gk::testing::share(std::move(m));
   const auto t0 = Clock::now();
-  s.ours = gk::MeshBvh::build(s.mesh).value();
+  gk::BvhBuildOptions options;
+  options.leaf_size = leaf_size;
+  s.ours = gk::MeshBvh::build(s.mesh, options).value();
   s.build_ms = ms_since(t0);
   s.bytes_per_triangle = static_cast<double>(mallinfo2().uordblks - heap0) / static_cast<double>(s.mesh->triangle_count());
   const auto t1 = Clock::now();
@@ -153,6 +155,7 @@ struct PairSpec {
 
 int main(int argc, char** argv) {
   const int per_kind = argc > 1 ? std::max(10, std::atoi(argv[1])) : 200;
+  const int leaf_size = argc > 2 ? std::max(1, std::atoi(argv[2])) : gk::BvhBuildOptions{}.leaf_size;
   // Scans, CAD tessellations, robot links, a thin part and very unequal sizes; sizes in mm.
   const PairSpec specs[] = {
       {"meshes/fcl/env.obj", 6000.0, "meshes/fcl/rob.obj", 600.0, "classic (FCL's env/rob)"},
@@ -168,10 +171,11 @@ int main(int argc, char** argv) {
   auto subject = [&](const char* path, double diagonal) -> const Subject& {
     const std::string key = std::string(path) + "@" + std::to_string(diagonal);
     auto it = subjects.find(key);
-    if (it == subjects.end()) it = subjects.emplace(key, load(path, diagonal)).first;
+    if (it == subjects.end()) it = subjects.emplace(key, load(path, diagonal, leaf_size)).first;
     return it->second;
   };
-  std::printf("# kernel vs FCL 0.7 OBBRSS, %d poses per kind; times in microseconds per query\n", per_kind);
+  std::printf("# kernel vs FCL 0.7 OBBRSS, %d poses per kind, %d triangles per leaf; times in microseconds per query\n",
+              per_kind, leaf_size);
   std::printf("%-44s %-8s %-10s %9s %9s %9s %9s %7s %7s %6s\n", "pair", "poses", "query", "ours_mean", "ours_med", "fcl_mean",
               "fcl_med", "x_mean", "x_med", "agree");
   AnswerHash hash;
