@@ -92,20 +92,11 @@ Result<PlacedMove> Engine::put_object(const std::string& scene_id, SceneObjectRe
                                       const StopToken& stop) {
   if (auto bad = check_object(object, "object"); !bad.ok()) return bad.error();
   if (auto bad = check_clearance(clearance_mm); !bad.ok()) return bad.error();
-  // The answer is decided before the object is stored, for the object as asked: a put that fails
-  // (a deadline, a cancel) stores nothing, and a concurrent edit of the same object cannot change
-  // what this answer describes (it once did: another client's pose answered for this one).
-  auto scene = scenes_.get(scene_id);
-  if (!scene.ok()) return scene.error();
-  // A new object has no id yet: a key no client id can be (ids never hold control characters).
-  const std::string key = object.id.empty() ? std::string("\x01new object") : object.id;
-  SceneObjectRecord asked = object;
-  asked.id = key;
-  scene.value().objects[key] = asked;
-  auto outcome = DragSession::once(scene.value(), key, clearance_mm, parts_, stop);
-  if (!outcome.ok()) return outcome.error();
-  auto stored = scenes_.put(scene_id, std::move(object));
+  std::optional<SceneObjectRecord> previous;
+  auto stored = scenes_.put(scene_id, std::move(object), &previous);
   if (!stored.ok()) return stored.error();
+  auto outcome = answer_stored_edit(scene_id, stored.value(), previous, clearance_mm, stop);
+  if (!outcome.ok()) return outcome.error();
   return PlacedMove{stored.value().id, std::move(outcome).value()};
 }
 
@@ -127,31 +118,38 @@ Result<MoveOutcome> Engine::move_object(const std::string& scene_id, const std::
   if (!checked.ok()) return checked.error();
   const StoredPose& pose = checked.value();
   if (auto bad = check_clearance(clearance_mm); !bad.ok()) return bad.error();
-  if (!drag) {
-    // Decided before the pose is stored, at the pose asked (see put_object): a move that fails
-    // stores nothing, and a concurrent move of the same object cannot answer for this one.
-    auto scene = scenes_.get(scene_id);
-    if (!scene.ok()) return scene.error();
-    auto self = scene.value().objects.find(object_id);
-    if (self == scene.value().objects.end()) return Error{ErrorCode::kNotFound, "object_id", "no object '" + object_id + "'"};
-    self->second.pose = pose;
-    auto outcome = DragSession::once(scene.value(), object_id, clearance_mm, parts_, stop);
-    if (!outcome.ok()) return outcome.error();
-    auto moved = scenes_.move(scene_id, object_id, pose);
-    if (!moved.ok()) return moved.error();
-    return outcome;
-  }
-  // A drag's frame is stored first: its session stays valid while the scene's version advances
-  // by this stream's own moves only (engine/scenes/drag_session). A frame that fails after its
-  // pose is stored leaves the pose stored (the next frame replaces it).
-  auto moved = scenes_.move(scene_id, object_id, pose);
+  std::optional<SceneObjectRecord> previous;
+  auto moved = scenes_.move(scene_id, object_id, pose, &previous);
   if (!moved.ok()) return moved.error();
-  {
-    auto version = scenes_.version(scene_id);
-    if (!version.ok()) return version.error();
-    return drag->move(scene_id, version.value(), [&] { return scenes_.get(scene_id); }, object_id, clearance_mm,
-                      pose.transform(), parts_, stop);
+  if (!drag) return answer_stored_edit(scene_id, moved.value(), previous, clearance_mm, stop);
+  // A drag's session stays valid while the scene's version advances by this stream's own moves
+  // only (engine/scenes/drag_session); its frame answers for this pose of the object.
+  auto version = scenes_.version(scene_id);
+  if (!version.ok()) return version.error();
+  auto frame = drag->move(scene_id, version.value(), [&] { return scenes_.get(scene_id); }, object_id, clearance_mm,
+                          pose.transform(), parts_, stop);
+  if (!frame.ok()) (void)scenes_.revert(scene_id, moved.value(), previous);
+  return frame;
+}
+
+// Every edit is stored first and answered after, on the scene as it is then with the object as
+// this edit stored it: of two concurrent edits the one answered later sees the other (answering
+// first and storing after let two objects be told CLEAR and stored overlapping), and an answer is
+// always for what its own edit stored, never for another client's pose or part of the same
+// object. An edit whose answer fails (a deadline, a cancel) is taken back unless edited since.
+Result<MoveOutcome> Engine::answer_stored_edit(const std::string& scene_id, const SceneObjectRecord& stored,
+                                               const std::optional<SceneObjectRecord>& previous, double clearance_mm,
+                                               const StopToken& stop) {
+  auto scene = scenes_.get(scene_id);
+  Result<MoveOutcome> outcome = Error{};
+  if (scene.ok()) {
+    scene.value().objects[stored.id] = stored;
+    outcome = DragSession::once(scene.value(), stored.id, clearance_mm, parts_, stop);
+  } else {
+    outcome = scene.error();
   }
+  if (!outcome.ok()) (void)scenes_.revert(scene_id, stored, previous);
+  return outcome;
 }
 
 Result<SceneRecord> Engine::delete_object(const std::string& scene_id, const std::string& object_id) {

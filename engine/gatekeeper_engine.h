@@ -61,15 +61,15 @@ class Engine {
   // --- scenes
   Result<SceneRecord> create_scene(const std::string& name);
   Result<SceneRecord> scene(const std::string& scene_id) const { return scenes_.get(scene_id); }
-  // Answers the object's contacts as a move would, then stores it (an empty id gets a new one);
-  // nothing is stored when the answer fails.
+  // Stores the object (an empty id gets a new one), then answers its contacts as a move would;
+  // taken back when the answer fails (see answer_stored_edit).
   Result<PlacedMove> put_object(const std::string& scene_id, SceneObjectRecord object, double clearance_mm,
                                 const StopToken& stop = {});
   // All or nothing: every object is checked (fields named objects[i]...) before any is stored.
   Result<std::vector<SceneObjectRecord>> put_objects(const std::string& scene_id, std::vector<SceneObjectRecord> objects);
   // Poses are checked here (engine::checked_pose), whoever calls.
-  // Answers the contacts at the pose asked, then stores it (nothing stored when the answer fails);
-  // a drag's frame (through its session) is stored first.
+  // Stores the pose, then answers the contacts at it (through the drag's session when there is
+  // one); taken back when the answer fails.
   Result<MoveOutcome> move_object(const std::string& scene_id, const std::string& object_id, const StoredPose& pose,
                                   double clearance_mm, DragSession* drag = nullptr, const StopToken& stop = {});
   Result<SceneRecord> delete_object(const std::string& scene_id, const std::string& object_id);
@@ -87,6 +87,9 @@ class Engine {
   void stop() { audits_.stop(); }
 
  private:
+  Result<MoveOutcome> answer_stored_edit(const std::string& scene_id, const SceneObjectRecord& stored,
+                                         const std::optional<SceneObjectRecord>& previous, double clearance_mm,
+                                         const StopToken& stop);
   // Id, labels, pose and part of an object (known_parts: parts a batch has already looked up).
   // The pose is replaced by the checked one (its axis scaled).
   Result<bool> check_object(SceneObjectRecord& object, const std::string& field,

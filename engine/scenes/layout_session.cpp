@@ -13,8 +13,6 @@ namespace {
 // itself is decided over every pair whatever the cap (assess's contract).
 constexpr std::size_t kFirstContacts = 32;
 
-OrientedBox obb_of(const MeshBvh& mesh) { return OrientedBox::fit(mesh.mesh().vertices()); }
-
 OrientedBox placed(const OrientedBox& local, const RigidTransform& pose) {
   return {pose.apply(local.center), pose.rotation * local.axes, local.half_extent};
 }
@@ -71,16 +69,13 @@ Result<std::unique_ptr<LayoutSession>> LayoutSession::create(std::vector<AuditOb
   s->boxes_.resize(n);
   s->obbs_.resize(n);
   s->stamp_.assign(n, 0);
-  // One oriented box per distinct mesh, placed per object.
-  std::unordered_map<const MeshBvh*, OrientedBox> local;
+  // One oriented box per distinct mesh (fitted once per mesh, kept with it), placed per object.
   for (std::size_t i = 0; i < n; ++i) {
     const AuditObject& o = s->objects_[i];
-    auto it = local.find(o.mesh.get());
-    if (it == local.end()) it = local.emplace(o.mesh.get(), obb_of(*o.mesh)).first;
-    s->obbs_[i] = placed(it->second, o.pose);
+    s->obbs_[i] = placed(o.mesh->oriented_box(), o.pose);
     s->boxes_[i] = transformed_box(o.mesh->root_bounds(), o.pose).expanded(0.5 * s->needed_gap_mm_);
   }
-  s->moving_local_obb_ = local.at(s->objects_[moving].mesh.get());
+  s->moving_local_obb_ = s->objects_[moving].mesh->oriented_box();
   s->grid_ = std::make_unique<UniformGrid>(s->boxes_, tolerances::kLayoutGridMinCellMm, moving);
   return s;
 }

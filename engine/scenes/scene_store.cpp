@@ -129,11 +129,16 @@ Result<bool> SceneStore::write_object(const std::string& scene_id, const SceneOb
   return true;
 }
 
-Result<SceneObjectRecord> SceneStore::put(const std::string& scene_id, SceneObjectRecord object) {
+Result<SceneObjectRecord> SceneStore::put(const std::string& scene_id, SceneObjectRecord object,
+                                          std::optional<SceneObjectRecord>* previous) {
   std::lock_guard<std::mutex> lock(mutex_);
   auto it = scenes_.find(scene_id);
   if (it == scenes_.end()) return Error{ErrorCode::kNotFound, "scene_id", "no scene '" + scene_id + "'"};
   if (object.id.empty()) object.id = new_id("obj");
+  if (previous) {
+    auto before = it->second.objects.find(object.id);
+    *previous = before == it->second.objects.end() ? std::nullopt : std::optional<SceneObjectRecord>(before->second);
+  }
   auto written = write_object(scene_id, object);
   if (!written.ok()) return written.error();
   it->second.objects[object.id] = object;
@@ -165,12 +170,14 @@ Result<std::vector<SceneObjectRecord>> SceneStore::put_many(const std::string& s
   return objects;
 }
 
-Result<SceneObjectRecord> SceneStore::move(const std::string& scene_id, const std::string& object_id, const StoredPose& pose) {
+Result<SceneObjectRecord> SceneStore::move(const std::string& scene_id, const std::string& object_id, const StoredPose& pose,
+                                           std::optional<SceneObjectRecord>* previous) {
   std::lock_guard<std::mutex> lock(mutex_);
   auto it = scenes_.find(scene_id);
   if (it == scenes_.end()) return Error{ErrorCode::kNotFound, "scene_id", "no scene '" + scene_id + "'"};
   auto ob = it->second.objects.find(object_id);
   if (ob == it->second.objects.end()) return Error{ErrorCode::kNotFound, "object_id", "no object '" + object_id + "'"};
+  if (previous) *previous = ob->second;
   SceneObjectRecord moved = ob->second;
   moved.pose = pose;
   auto written = write_object(scene_id, moved);
@@ -180,11 +187,7 @@ Result<SceneObjectRecord> SceneStore::move(const std::string& scene_id, const st
   return moved;
 }
 
-Result<SceneRecord> SceneStore::remove(const std::string& scene_id, const std::string& object_id) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  auto it = scenes_.find(scene_id);
-  if (it == scenes_.end()) return Error{ErrorCode::kNotFound, "scene_id", "no scene '" + scene_id + "'"};
-  if (!it->second.objects.count(object_id)) return Error{ErrorCode::kNotFound, "object_id", "no object '" + object_id + "'"};
+Result<bool> SceneStore::delete_object(const std::string& scene_id, const std::string& object_id) {
   sqlite3_stmt* stmt = nullptr;
   sqlite3_prepare_v2(db_, "DELETE FROM scene_objects WHERE scene_id = ? AND id = ?", -1, &stmt, nullptr);
   sqlite3_bind_text(stmt, 1, scene_id.c_str(), -1, SQLITE_TRANSIENT);
@@ -192,9 +195,45 @@ Result<SceneRecord> SceneStore::remove(const std::string& scene_id, const std::s
   const int rc = sqlite3_step(stmt);
   sqlite3_finalize(stmt);
   if (rc != SQLITE_DONE) return storage_error("cannot delete the object");
+  return true;
+}
+
+Result<SceneRecord> SceneStore::remove(const std::string& scene_id, const std::string& object_id) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto it = scenes_.find(scene_id);
+  if (it == scenes_.end()) return Error{ErrorCode::kNotFound, "scene_id", "no scene '" + scene_id + "'"};
+  if (!it->second.objects.count(object_id)) return Error{ErrorCode::kNotFound, "object_id", "no object '" + object_id + "'"};
+  if (auto deleted = delete_object(scene_id, object_id); !deleted.ok()) return deleted.error();
   it->second.objects.erase(object_id);
   ++it->second.version;
   return it->second;
+}
+
+namespace {
+
+bool same_record(const SceneObjectRecord& a, const SceneObjectRecord& b) {
+  return a.id == b.id && a.name == b.name && a.category == b.category && a.part_id == b.part_id && a.group == b.group &&
+         a.pose.translation == b.pose.translation && a.pose.axis == b.pose.axis && a.pose.angle_deg == b.pose.angle_deg;
+}
+
+}  // namespace
+
+Result<bool> SceneStore::revert(const std::string& scene_id, const SceneObjectRecord& stored,
+                                const std::optional<SceneObjectRecord>& previous) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto it = scenes_.find(scene_id);
+  if (it == scenes_.end()) return false;
+  auto ob = it->second.objects.find(stored.id);
+  if (ob == it->second.objects.end() || !same_record(ob->second, stored)) return false;  // edited since: kept
+  if (previous) {
+    if (auto written = write_object(scene_id, *previous); !written.ok()) return written.error();
+    ob->second = *previous;
+  } else {
+    if (auto deleted = delete_object(scene_id, stored.id); !deleted.ok()) return deleted.error();
+    it->second.objects.erase(ob);
+  }
+  ++it->second.version;
+  return true;
 }
 
 }  // namespace gk::engine

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -44,16 +45,25 @@ class SceneStore {
   Result<SceneRecord> get(const std::string& scene_id) const;
   // The scene's change counter alone (no copy of its objects): how a drag knows nobody else edited.
   Result<std::uint64_t> version(const std::string& scene_id) const;
-  // Inserts or replaces; an empty object id gets a new one. Returns the stored object.
-  Result<SceneObjectRecord> put(const std::string& scene_id, SceneObjectRecord object);
+  // Inserts or replaces; an empty object id gets a new one. Returns the stored object; `previous`
+  // (when given) receives what the id held before (nothing for a new object).
+  Result<SceneObjectRecord> put(const std::string& scene_id, SceneObjectRecord object,
+                                std::optional<SceneObjectRecord>* previous = nullptr);
   // All or nothing, in one transaction; returns the stored objects (with their ids) in order.
   Result<std::vector<SceneObjectRecord>> put_many(const std::string& scene_id, std::vector<SceneObjectRecord> objects);
-  Result<SceneObjectRecord> move(const std::string& scene_id, const std::string& object_id, const StoredPose& pose);
+  Result<SceneObjectRecord> move(const std::string& scene_id, const std::string& object_id, const StoredPose& pose,
+                                 std::optional<SceneObjectRecord>* previous = nullptr);
+  // Takes back an edit whose answer failed: the object returns to `previous` (or goes, when it
+  // was new) only if it is still exactly as that edit stored it (a later edit is kept). Returns
+  // whether it was taken back.
+  Result<bool> revert(const std::string& scene_id, const SceneObjectRecord& stored,
+                      const std::optional<SceneObjectRecord>& previous);
   Result<SceneRecord> remove(const std::string& scene_id, const std::string& object_id);
 
  private:
   SceneStore() = default;
   Result<bool> write_object(const std::string& scene_id, const SceneObjectRecord& o);
+  Result<bool> delete_object(const std::string& scene_id, const std::string& object_id);  // mutex_ held
   std::string new_id(const char* prefix);
 
   sqlite3* db_ = nullptr;

@@ -277,7 +277,20 @@ Result<std::shared_ptr<MeshBvh>> MeshBvh::deserialize(std::shared_ptr<const Tria
   return bvh;
 }
 
+OrientedBox MeshBvh::oriented_box() const {
+  std::lock_guard<std::mutex> lock(oriented_box_mutex_);
+  if (!oriented_box_fitted_) {
+    oriented_box_ = OrientedBox::fit(mesh_->vertices());
+    oriented_box_fitted_ = true;
+  }
+  return oriented_box_;
+}
+
 void MeshBvh::refit(std::shared_ptr<const TriangleMesh> moved_mesh) {
+  {
+    std::lock_guard<std::mutex> lock(oriented_box_mutex_);
+    oriented_box_fitted_ = false;
+  }
   mesh_ = std::move(moved_mesh);
   impl_->set->set_mesh(*mesh_);
   if (impl_->tree.Length() > 0) BVH::UpdateBounds<double, 3>(impl_->set.get(), &impl_->tree, 0);

@@ -6,12 +6,14 @@
 #include "kernel/core/aabb.h"
 #include "kernel/core/geometry_types.h"
 #include "kernel/core/status.h"
+#include "kernel/mesh/oriented_box.h"
 #include "kernel/mesh/triangle_mesh.h"
 
 #include <NCollection_Vec3.hxx>
 #include <NCollection_Vec4.hxx>
 
 #include <memory>
+#include <mutex>
 #include <vector>
 
 namespace gk {
@@ -58,6 +60,9 @@ class MeshBvh {
   int node_count() const;
   int depth() const;
   Aabb root_bounds() const;
+  // The mesh's principal-axes box (OrientedBox::fit of its vertices), fitted on first use and kept
+  // until a refit: a scene's objects share it per mesh instead of fitting it for every move.
+  OrientedBox oriented_box() const;
 
   // Tree-ordered triangle k: its corners and its index in the mesh.
   const Triangle& ordered_triangle(int k) const { return ordered_corners_[k]; }
@@ -78,6 +83,9 @@ class MeshBvh {
   std::vector<Vec3> node_half_;
   std::vector<std::uint32_t> ordered_to_mesh_;
   int depth_ = 0;
+  mutable std::mutex oriented_box_mutex_;
+  mutable bool oriented_box_fitted_ = false;
+  mutable OrientedBox oriented_box_;
 };
 
 }  // namespace gk

@@ -270,6 +270,117 @@ TEST(ObjectNeighbours, ConcurrentMovesOfOneObjectAreEachAnsweredForTheirOwnPose)
   EXPECT_EQ(wrong.load(), 0) << "of " << answered.load();
 }
 
+// Two clients moving (or putting) two different objects to the same place at once: at least
+// one of them is told of the other (answering before storing once let both be told CLEAR and both
+// be stored overlapping). A dense neighbour near the place makes each answer take a while, as a
+// real one does.
+TEST(ObjectNeighbours, TwoObjectsMovedTogetherToOnePlaceAreNeverBothToldClear) {
+  Stores stores("together");
+  Engine& engine = stores.engine();
+  testing::Rng rng(3);
+  const std::string dense = stores.upload(testing::random_closed_blob(rng, 5, 60.0, 0.05, Vec3::Zero()), "dense");
+  const std::string box = stores.upload(testing::box_mesh(Vec3(0, 0, 0), Vec3(10, 10, 10)), "box");
+  auto scene = engine.create_scene("together").value();
+  SceneObjectRecord neighbour, x, y;
+  neighbour.id = "neighbour";
+  neighbour.part_id = dense;
+  neighbour.pose.translation = Vec3(-68.0, 5.0, 5.0);  // its surface a few mm from the place
+  x.id = "x";
+  x.part_id = box;
+  x.pose.translation = Vec3(1000, 0, 0);
+  y = x;
+  y.id = "y";
+  y.pose.translation = Vec3(-1000, 0, 0);
+  ASSERT_TRUE(engine.put_objects(scene.id, {neighbour, x, y}).ok());
+  StoredPose place;  // both go here
+  int both_clear = 0;
+  const int rounds = testing::samples(40);
+  for (bool put : {false, true}) {
+    for (int round = 0; round < rounds; ++round) {
+      StoredPose away_x, away_y;
+      away_x.translation = Vec3(1000, 0, 0);
+      away_y.translation = Vec3(-1000, 0, 0);
+      ASSERT_TRUE(engine.move_object(scene.id, "x", away_x, 0.0).ok());
+      ASSERT_TRUE(engine.move_object(scene.id, "y", away_y, 0.0).ok());
+      std::atomic<int> ready{0};
+      Verdict vx = Verdict::kClear, vy = Verdict::kClear;
+      const auto go = [&](const std::string& id, Verdict* verdict) {
+        ++ready;
+        while (ready.load() < 2) {
+        }
+        Result<MoveOutcome> got = Error{};
+        if (put) {
+          SceneObjectRecord o;
+          o.id = id;
+          o.part_id = box;
+          o.pose = place;
+          auto placed = engine.put_object(scene.id, o, 50.0);
+          got = placed.ok() ? Result<MoveOutcome>(placed.value().outcome) : Result<MoveOutcome>(placed.error());
+        } else {
+          got = engine.move_object(scene.id, id, place, 50.0);
+        }
+        ASSERT_TRUE(got.ok());
+        *verdict = Verdict::kClear;
+        for (const ObjectContactResult& c : got.value().contacts)
+          if (c.other == (id == "x" ? "y" : "x")) *verdict = c.verdict;
+      };
+      std::thread a(go, "x", &vx), b(go, "y", &vy);
+      a.join();
+      b.join();
+      if (vx == Verdict::kClear && vy == Verdict::kClear) ++both_clear;
+    }
+  }
+  EXPECT_EQ(both_clear, 0);
+}
+
+// A move racing a put that replaces the same object's part: what is stored is what some answer
+// described (a move's pose once landed on a part nobody had checked there).
+TEST(ObjectNeighbours, AMoveRacingAPartReplacementLeavesAStateThatWasAnswered) {
+  Stores stores("replace");
+  Engine& engine = stores.engine();
+  const std::string small = stores.upload(testing::box_mesh(Vec3(0, 0, 0), Vec3(10, 10, 10)), "small");
+  const std::string large = stores.upload(testing::box_mesh(Vec3(0, 0, 0), Vec3(200, 200, 200)), "large");
+  auto scene = engine.create_scene("replace").value();
+  SceneObjectRecord wall, x;
+  wall.id = "wall";
+  wall.part_id = small;
+  wall.pose.translation = Vec3(300, 0, 0);
+  x.id = "x";
+  x.part_id = small;
+  x.pose.translation = Vec3(-5000, 0, 0);
+  ASSERT_TRUE(engine.put_objects(scene.id, {wall, x}).ok());
+  int unanswered = 0;
+  for (int round = 0; round < testing::samples(60); ++round) {
+    SceneObjectRecord reset = x;
+    ASSERT_TRUE(engine.put_object(scene.id, reset, 0.0).ok());
+    StoredPose near_wall;  // the small part is clear of the wall here, the large one is not
+    near_wall.translation = Vec3(150, 0, 0);
+    SceneObjectRecord replaced = x;  // the large part, far away
+    replaced.part_id = large;
+    std::atomic<int> ready{0};
+    Verdict move_verdict = Verdict::kClear;
+    std::thread mover([&] {
+      ++ready;
+      while (ready.load() < 2) {
+      }
+      auto got = engine.move_object(scene.id, "x", near_wall, 0.0);
+      if (got.ok()) move_verdict = got.value().verdict;
+    });
+    std::thread putter([&] {
+      ++ready;
+      while (ready.load() < 2) {
+      }
+      (void)engine.put_object(scene.id, replaced, 0.0);
+    });
+    mover.join();
+    putter.join();
+    const SceneObjectRecord now = engine.scene(scene.id).value().objects.at("x");
+    // The large part at the wall was answered only if the move's answer said COLLISION.
+    if (now.part_id == large && now.pose.translation.x() == 150.0 && move_verdict == Verdict::kClear) ++unanswered;
+  }
+  EXPECT_EQ(unanswered, 0);
+}
+
 // A move or a put whose answer is stopped (a deadline, a cancel) stores nothing.
 TEST(ObjectNeighbours, AMoveOrPutThatIsStoppedStoresNothing) {
   Stores stores("stopped");
