@@ -106,13 +106,16 @@ Call begin_frame(const Call& stream, const char* method) {
 void end_call(RpcStats& stats, const Call& call, const grpc::Status& status, const google::protobuf::Message* answer) {
   const double micros = us_since(call.t0);
   stats.record(call.method, micros, !status.ok());
+  const grpc::StatusCode code = status.error_code();
+  const bool server_fault =
+      code == grpc::StatusCode::INTERNAL || code == grpc::StatusCode::UNKNOWN || code == grpc::StatusCode::DATA_LOSS;
+  if (!call_line_wanted(server_fault)) return;  // no line: no fields gathered on the answer's path
   std::vector<LogField> fields = {{"request_id", call.request_id}, {"method", call.method}};
   fields.push_back({"status", status_code_name(status.error_code())});
   fields.push_back({"micros", number(micros), true});
   if (status.ok()) add_answer_fields(answer, fields);
   else fields.push_back({"error", status.error_message()});
-  const grpc::StatusCode code = status.error_code();
-  log_call(fields, code == grpc::StatusCode::INTERNAL || code == grpc::StatusCode::UNKNOWN || code == grpc::StatusCode::DATA_LOSS);
+  log_call(fields, server_fault);
 }
 
 }  // namespace gk::server

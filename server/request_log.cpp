@@ -139,11 +139,16 @@ std::optional<std::string> configure_logging(const LogOptions& options) {
   return std::nullopt;
 }
 
+bool call_line_wanted(bool server_fault) {
+  if (!g_call_lines) return false;
+  const auto logger = spdlog::get(kCallLogger);
+  return logger && logger->should_log(server_fault ? spdlog::level::err : spdlog::level::info);
+}
+
 void log_call(const std::vector<LogField>& fields, bool server_fault) {
-  if (!g_call_lines) return;
+  if (!call_line_wanted(server_fault)) return;
   const auto logger = spdlog::get(kCallLogger);
   const spdlog::level::level_enum level = server_fault ? spdlog::level::err : spdlog::level::info;
-  if (!logger || !logger->should_log(level)) return;
   std::string line;
   for (const LogField& f : fields) {
     if (g_format == LogFormat::kJson) {

@@ -38,6 +38,8 @@ struct LogField {
 // error when the daemon itself failed the call (INTERNAL, UNKNOWN, DATA_LOSS). What a client got
 // wrong (a bad field, an unknown id) is info: it is the client's to fix, not the operator's.
 void log_call(const std::vector<LogField>& fields, bool server_fault);
+// Whether log_call would write that line (cheap: a call's fields are only gathered when it would).
+bool call_line_wanted(bool server_fault);
 
 // The text of a JSON string literal (with its quotes) for any bytes: control characters and
 // invalid UTF-8 are escaped, so that a line is always one valid JSON value.

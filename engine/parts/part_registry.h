@@ -32,8 +32,10 @@ class PartRegistry {
   PartRegistry(PartStore& store, const std::string& bvh_cache_dir, std::size_t memory_budget_bytes = kDefaultPartMemoryBytes)
       : store_(store), bvh_cache_(bvh_cache_dir), memory_budget_bytes_(memory_budget_bytes) {}
   static constexpr std::size_t kDefaultPartMemoryBytes = 8ull << 30;
-  // A loaded part's memory, estimated from its triangles: the mesh with its BVH takes about 310-350
-  // bytes per triangle (docs/PERFORMANCE.md), its vertices 24 bytes each.
+  // A loaded part's memory, estimated from its triangles: 350 bytes per triangle plus 24 per vertex
+  // is above what a mesh with its BVH was measured to keep (114-218 bytes per triangle, vertices
+  // included, with trees of 4 triangles per leaf: kernel_fcl_table in docs/PERFORMANCE.md), so
+  // the budget errs towards dropping parts early, never towards exceeding it.
   static constexpr std::size_t kBytesPerTriangle = 350;
 
   struct MemoryStats {

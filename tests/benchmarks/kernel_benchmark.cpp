@@ -10,6 +10,7 @@
 #include "mesh_io/mesh_file_reader.h"
 #include "tests/benchmarks/latency_counters.h"
 #include "tests/support/near_contact_poses.h"
+#include "tests/support/fcl_peer.h"
 #include "tests/support/random_meshes.h"
 
 #include <benchmark/benchmark.h>
@@ -30,24 +31,13 @@ namespace {
 using gk::RigidTransform;
 using gk::Vec3;
 using Clock = std::chrono::steady_clock;
-using FclModel = fcl::BVHModel<fcl::OBBRSSd>;
+using gk::testing::FclModel;
+using gk::testing::to_fcl;
 
 struct Subject {
   std::shared_ptr<gk::MeshBvh> ours;
   std::shared_ptr<FclModel> fcl;
 };
-
-std::shared_ptr<FclModel> make_fcl(const gk::TriangleMesh& mesh) {
-  auto model = std::make_shared<FclModel>();
-  std::vector<fcl::Vector3d> points;
-  for (const Vec3& v : mesh.vertices()) points.emplace_back(v.x(), v.y(), v.z());
-  std::vector<fcl::Triangle> triangles;
-  for (const auto& f : mesh.faces()) triangles.emplace_back(f[0], f[1], f[2]);
-  model->beginModel();
-  model->addSubModel(points, triangles);
-  model->endModel();
-  return model;
-}
 
 // Meshes are loaded once; `scale` turns metre-unit robot meshes into millimetres.
 const Subject& subject(const std::string& relative, double scale = 1.0) {
@@ -67,15 +57,8 @@ const Subject& subject(const std::string& relative, double scale = 1.0) {
   }
   Subject s;
   s.ours = gk::MeshBvh::build(gk::testing::share(m)).value();
-  s.fcl = make_fcl(m);
+  s.fcl = gk::testing::make_fcl_model(m);
   return cache.emplace(relative, s).first->second;
-}
-
-fcl::Transform3d to_fcl(const RigidTransform& t) {
-  fcl::Transform3d out = fcl::Transform3d::Identity();
-  out.linear() = t.rotation;
-  out.translation() = t.translation;
-  return out;
 }
 
 // FCL's env/rob procedure: random translations in +-3000 mm, random rotations (fixed seed).
@@ -217,7 +200,7 @@ void BM_Build_Ours(benchmark::State& state) {
 
 void BM_Build_Fcl(benchmark::State& state) {
   auto mesh = gk::mesh_io::read_mesh_file(gk::testing::shared_data("meshes/occt/TR12J_OCC64K.stl")).value();
-  for (auto _ : state) benchmark::DoNotOptimize(make_fcl(mesh));
+  for (auto _ : state) benchmark::DoNotOptimize(gk::testing::make_fcl_model(mesh));
   state.counters["triangles"] = static_cast<double>(mesh.triangle_count());
 }
 

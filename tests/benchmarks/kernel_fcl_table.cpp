@@ -10,6 +10,7 @@
 #include "kernel/query/mesh_distance.h"
 #include "mesh_io/mesh_file_reader.h"
 #include "tests/support/near_contact_poses.h"
+#include "tests/support/fcl_peer.h"
 #include "tests/support/random_meshes.h"
 
 #include <fcl/narrowphase/collision.h>
@@ -34,7 +35,8 @@ namespace {
 using gk::RigidTransform;
 using gk::Vec3;
 using Clock = std::chrono::steady_clock;
-using FclModel = fcl::BVHModel<fcl::OBBRSSd>;
+using gk::testing::FclModel;
+using gk::testing::to_fcl;
 
 struct Subject {
   std::string name;
@@ -44,18 +46,6 @@ struct Subject {
   double build_ms = 0.0, fcl_build_ms = 0.0;
   double bytes_per_triangle = 0.0;  // heap the mesh with its tree keeps (glibc's count of bytes in use)
 };
-
-std::shared_ptr<FclModel> make_fcl(const gk::TriangleMesh& mesh) {
-  auto model = std::make_shared<FclModel>();
-  std::vector<fcl::Vector3d> points;
-  for (const Vec3& v : mesh.vertices()) points.emplace_back(v.x(), v.y(), v.z());
-  std::vector<fcl::Triangle> triangles;
-  for (const auto& f : mesh.faces()) triangles.emplace_back(f[0], f[1], f[2]);
-  model->beginModel();
-  model->addSubModel(points, triangles);
-  model->endModel();
-  return model;
-}
 
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
@@ -84,16 +74,9 @@ Subject load(const std::string& relative, double diagonal_mm, int leaf_size) {
   s.build_ms = ms_since(t0);
   s.bytes_per_triangle = static_cast<double>(mallinfo2().uordblks - heap0) / static_cast<double>(s.mesh->triangle_count());
   const auto t1 = Clock::now();
-  s.fcl = make_fcl(*s.mesh);
+  s.fcl = gk::testing::make_fcl_model(*s.mesh);
   s.fcl_build_ms = ms_since(t1);
   return s;
-}
-
-fcl::Transform3d to_fcl(const RigidTransform& t) {
-  fcl::Transform3d out = fcl::Transform3d::Identity();
-  out.linear() = t.rotation;
-  out.translation() = t.translation;
-  return out;
 }
 
 struct Answer {

@@ -35,6 +35,8 @@
 #include <fcl/narrowphase/distance_request.h>
 #include <fcl/narrowphase/distance_result.h>
 
+#include "tests/support/fcl_peer.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -57,7 +59,9 @@ namespace {
 using testing::PairSet;
 using testing::shared_data;
 
-using FclModel = fcl::BVHModel<fcl::OBBRSSd>;
+using testing::FclModel;
+using testing::make_fcl_model;
+using testing::to_fcl;
 
 // Far more than the ~470k triangle pairs env x rob has: FCL never truncates the contact list.
 constexpr std::size_t kFclMaxContacts = 10'000'000;
@@ -76,20 +80,6 @@ struct Models {
   std::shared_ptr<MeshBvh> env_bvh, rob_bvh;
   std::shared_ptr<FclModel> env_fcl, rob_fcl;
 };
-
-std::shared_ptr<FclModel> make_fcl_model(const TriangleMesh& mesh) {
-  std::vector<fcl::Vector3d> points;
-  points.reserve(mesh.vertices().size());
-  for (const Vec3& v : mesh.vertices()) points.emplace_back(v.x(), v.y(), v.z());
-  std::vector<fcl::Triangle> triangles;
-  triangles.reserve(mesh.triangle_count());
-  for (const auto& f : mesh.faces()) triangles.emplace_back(f[0], f[1], f[2]);  // same order: same ids
-  auto model = std::make_shared<FclModel>();
-  model->beginModel(static_cast<int>(triangles.size()), static_cast<int>(points.size()));
-  model->addSubModel(points, triangles);
-  model->endModel();
-  return model;
-}
 
 struct LabeledPose {
   std::string label;
@@ -178,13 +168,6 @@ std::vector<LabeledPose> random_poses() {
   std::vector<LabeledPose> poses;
   for (int i = 0; i < 200; ++i) poses.push_back({"random[" + std::to_string(i) + "]", testing::random_pose(rng, 3000.0)});
   return poses;
-}
-
-fcl::Transform3d to_fcl(const RigidTransform& pose) {
-  fcl::Transform3d tf = fcl::Transform3d::Identity();
-  tf.linear() = pose.rotation;
-  tf.translation() = pose.translation;
-  return tf;
 }
 
 std::string describe(const PairSet& pairs, std::size_t limit = 8) {
