@@ -14,16 +14,15 @@ namespace gk {
 template <typename Visit>
 void for_each_leaf_along(const MeshBvh& mesh, const Vec3& origin, const Vec3& dir, double t_min, double t_max, double slack,
                          Visit&& visit) {
-  const MeshBvh::NodeView nodes = mesh.nodes();
-  int stack[128];  // OCCT trees are at most 32 levels deep (BVH_Constants_MaxTreeDepth)
+  const BvhNode* nodes = mesh.nodes();
+  int stack[2 * kMaxBvhDepth + 4];  // at most one pending sibling per level
   int top = 0;
   stack[top++] = 0;
   while (top > 0) {
     const int n = stack[--top];
-    const auto& lo = nodes.min_point[n];
-    const auto& hi = nodes.max_point[n];
-    const double los[3] = {lo.x() - slack, lo.y() - slack, lo.z() - slack};
-    const double his[3] = {hi.x() + slack, hi.y() + slack, hi.z() + slack};
+    const BvhNode& node = nodes[n];
+    const double los[3] = {node.lo[0] - slack, node.lo[1] - slack, node.lo[2] - slack};
+    const double his[3] = {node.hi[0] + slack, node.hi[1] + slack, node.hi[2] + slack};
     double t0 = t_min, t1 = t_max;
     bool miss = false;
     for (int k = 0; k < 3 && !miss; ++k) {
@@ -38,12 +37,12 @@ void for_each_leaf_along(const MeshBvh& mesh, const Vec3& origin, const Vec3& di
       miss = t0 > t1;
     }
     if (miss) continue;
-    if (nodes.info[n].x() == 0) {
-      stack[top++] = nodes.info[n].y();
-      stack[top++] = nodes.info[n].z();
+    if (!node.is_leaf()) {
+      stack[top++] = node.second_child();
+      stack[top++] = n + 1;
       continue;
     }
-    if (!visit(nodes.info[n].y(), nodes.info[n].z())) return;
+    if (!visit(node.first_triangle(), node.last_triangle())) return;
   }
 }
 

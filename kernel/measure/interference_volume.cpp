@@ -30,7 +30,7 @@ void crossings(const MeshBvh& m, const Vec3& origin, const Vec3& dir, std::vecto
   for_each_leaf_along(m, origin, dir, -inf, inf, 0.0, [&](int first, int last) {
     for (int k = first; k <= last; ++k) {
       // Moller-Trumbore.
-      const Triangle& tri = m.ordered_triangle(k);
+      const Triangle tri = m.ordered_triangle(k);
       const Vec3 e1 = tri[1] - tri[0], e2 = tri[2] - tri[0];
       const Vec3 p = dir.cross(e2);
       const double det = e1.dot(p);

@@ -170,7 +170,8 @@ bool meeting_interval(const Triangle& ta, const Triangle& tb, const Vec3& u, dou
 // dual traversal with B's node boxes swept along u. False when more than max_pairs pairs qualify.
 bool meeting_intervals(const MeshBvh& a, const MeshBvh& b, const RigidTransform& b_in_a, const Vec3& u, double t_max,
                        std::size_t max_pairs, std::vector<std::pair<double, double>>& out) {
-  const MeshBvh::NodeView na = a.nodes(), nb = b.nodes();
+  const BvhNode* na = a.nodes();
+  const BvhNode* nb = b.nodes();
   const Mat3 abs_r = b_in_a.rotation.cwiseAbs();
   const double slack = tolerances::kComparisonSlackRelative * std::max({a.root_bounds().max.cwiseAbs().maxCoeff(), a.root_bounds().min.cwiseAbs().maxCoeff(),
                                         b_in_a.translation.norm() + b.root_bounds().max.cwiseAbs().maxCoeff() +
@@ -182,33 +183,32 @@ bool meeting_intervals(const MeshBvh& a, const MeshBvh& b, const RigidTransform&
     const auto [ia, ib] = stack.back();
     stack.pop_back();
     // B's node box in A's frame, swept from t = 0 to t_max.
-    const Vec3 cb = b_in_a.apply(b.node_center(ib));
-    const Vec3 hb = abs_r * b.node_half_extent(ib);
+    const Vec3 cb = b_in_a.apply(nb[ib].center());
+    const Vec3 hb = abs_r * nb[ib].half_extent();
     const Vec3 lo_b = cb - hb + sweep.cwiseMin(Vec3::Zero()) - Vec3::Constant(slack);
     const Vec3 hi_b = cb + hb + sweep.cwiseMax(Vec3::Zero()) + Vec3::Constant(slack);
-    const Vec3 lo_a(na.min_point[ia].x(), na.min_point[ia].y(), na.min_point[ia].z());
-    const Vec3 hi_a(na.max_point[ia].x(), na.max_point[ia].y(), na.max_point[ia].z());
+    const Vec3 lo_a = na[ia].lower(), hi_a = na[ia].upper();
     if ((lo_a.array() > hi_b.array()).any() || (lo_b.array() > hi_a.array()).any()) continue;
-    const bool leaf_a = na.info[ia].x() != 0, leaf_b = nb.info[ib].x() != 0;
+    const bool leaf_a = na[ia].is_leaf(), leaf_b = nb[ib].is_leaf();
     if (leaf_a && leaf_b) {
-      for (int ka = na.info[ia].y(); ka <= na.info[ia].z(); ++ka)
-        for (int kb = nb.info[ib].y(); kb <= nb.info[ib].z(); ++kb) {
+      for (int ka = na[ia].first_triangle(); ka <= na[ia].last_triangle(); ++ka)
+        for (int kb = nb[ib].first_triangle(); kb <= nb[ib].last_triangle(); ++kb) {
           if (++pairs > max_pairs) return false;
-          const Triangle& ta = a.ordered_triangle(ka);
-          const Triangle& tl = b.ordered_triangle(kb);
+          const Triangle ta = a.ordered_triangle(ka);
+          const Triangle tl = b.ordered_triangle(kb);
           const Triangle tb = {b_in_a.apply(tl[0]), b_in_a.apply(tl[1]), b_in_a.apply(tl[2])};
           double lo = 0.0, hi = 0.0;
           if (meeting_interval(ta, tb, u, t_max, slack, lo, hi)) out.emplace_back(lo, hi);
         }
       continue;
     }
-    const bool split_a = !leaf_a && (leaf_b || a.node_half_extent(ia).squaredNorm() >= b.node_half_extent(ib).squaredNorm());
+    const bool split_a = !leaf_a && (leaf_b || na[ia].size() >= nb[ib].size());
     if (split_a) {
-      stack.push_back({na.info[ia].y(), ib});
-      stack.push_back({na.info[ia].z(), ib});
+      stack.push_back({ia + 1, ib});
+      stack.push_back({na[ia].second_child(), ib});
     } else {
-      stack.push_back({ia, nb.info[ib].y()});
-      stack.push_back({ia, nb.info[ib].z()});
+      stack.push_back({ia, ib + 1});
+      stack.push_back({ia, nb[ib].second_child()});
     }
   }
   return true;

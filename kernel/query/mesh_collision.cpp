@@ -22,7 +22,7 @@ bool test_leaves(const MeshPairFrame& frame, int leaf_a, int leaf_b, const Colli
     const Triangle tb = frame.b_triangle_in_a(kb);
     for (int ka = frame.begin_a(leaf_a); ka <= frame.end_a(leaf_a); ++ka) {
       ++result.stats.triangle_pairs_tested;
-      const Triangle& ta = a.ordered_triangle(ka);
+      const Triangle ta = a.ordered_triangle(ka);
       const TriangleIntersection hit = intersect_triangles(ta, tb);
       if (!hit.intersects) continue;
       Contact c;
@@ -55,7 +55,7 @@ Result<CollisionResult> collide(const MeshBvh& a, const RigidTransform& pose_a, 
   CollisionResult result;
 
   // Depth-first over node pairs; the stack never holds more than depth(A) + depth(B) + 2 entries.
-  std::array<NodePair, 2 * 64 + 4> stack;
+  std::array<NodePair, 2 * kMaxBvhDepth + 4> stack;
   int top = 0;
   stack[top++] = {0, 0};
   while (top > 0) {

@@ -112,7 +112,7 @@ Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pos
   const MeshPairFrame& frame = made.value();
   ProximityResult result;
 
-  std::array<std::pair<int, int>, 2 * 64 + 4> stack;
+  std::array<std::pair<int, int>, 2 * kMaxBvhDepth + 4> stack;
   int top = 0;
   stack[top++] = {0, 0};
   while (top > 0 && !result.truncated) {

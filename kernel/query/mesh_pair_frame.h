@@ -37,34 +37,38 @@ class MeshPairFrame {
   const RigidTransform& pose_a() const { return pose_a_; }
   const RigidTransform& b_in_a() const { return b_in_a_; }
 
-  bool is_leaf_a(int n) const { return na_.info[n].x() != 0; }
-  bool is_leaf_b(int n) const { return nb_.info[n].x() != 0; }
-  int first_child_a(int n) const { return na_.info[n].y(); }
-  int second_child_a(int n) const { return na_.info[n].z(); }
-  int first_child_b(int n) const { return nb_.info[n].y(); }
-  int second_child_b(int n) const { return nb_.info[n].z(); }
-  // Leaf primitive range [begin, end] inclusive, in tree order.
-  int begin_a(int n) const { return na_.info[n].y(); }
-  int end_a(int n) const { return na_.info[n].z(); }
-  int begin_b(int n) const { return nb_.info[n].y(); }
-  int end_b(int n) const { return nb_.info[n].z(); }
+  bool is_leaf_a(int n) const { return na_[n].is_leaf(); }
+  bool is_leaf_b(int n) const { return nb_[n].is_leaf(); }
+  int first_child_a(int n) const { return n + 1; }
+  int second_child_a(int n) const { return na_[n].second_child(); }
+  int first_child_b(int n) const { return n + 1; }
+  int second_child_b(int n) const { return nb_[n].second_child(); }
+  // Leaf triangle range [begin, end] inclusive, in tree order.
+  int begin_a(int n) const { return na_[n].first_triangle(); }
+  int end_a(int n) const { return na_[n].last_triangle(); }
+  int begin_b(int n) const { return nb_[n].first_triangle(); }
+  int end_b(int n) const { return nb_[n].last_triangle(); }
 
   // Size measure used to decide which node of a pair to split: the larger one.
-  double size_a(int n) const { return diagonal_sq(*a_, n); }
-  double size_b(int n) const { return diagonal_sq(*b_, n); }
+  float size_a(int n) const { return na_[n].size(); }
+  float size_b(int n) const { return nb_[n].size(); }
 
   // Separating-axis test of node boxes, conservative by the rounding slack.
   bool nodes_overlap(int node_a, int node_b, double margin = 0.0) const {
-    return boxes_overlap(a_->node_center(node_a), a_->node_half_extent(node_a), b_in_a_.apply(b_->node_center(node_b)),
-                         b_in_a_.rotation, abs_r_, b_->node_half_extent(node_b), slack_ + margin);
+    const BvhNode& a = na_[node_a];
+    const BvhNode& b = nb_[node_b];
+    return boxes_overlap(a.center(), a.half_extent(), b_in_a_.apply(b.center()), b_in_a_.rotation, abs_r_, b.half_extent(),
+                         slack_ + margin);
   }
 
   // A lower bound of the distance between anything in node_a and anything in node_b: the larger of
   // the box-to-box gaps measured along A's axes and along B's axes.
   double nodes_lower_bound(int node_a, int node_b) const {
-    const Vec3& ea = a_->node_half_extent(node_a);
-    const Vec3& eb = b_->node_half_extent(node_b);
-    const Vec3 d = b_in_a_.apply(b_->node_center(node_b)) - a_->node_center(node_a);
+    const BvhNode& a = na_[node_a];
+    const BvhNode& b = nb_[node_b];
+    const Vec3 ea = a.half_extent();
+    const Vec3 eb = b.half_extent();
+    const Vec3 d = b_in_a_.apply(b.center()) - a.center();
     const Vec3 gap_a = (d.cwiseAbs() - ea - abs_r_ * eb).cwiseMax(0.0);
     const Vec3 gap_b = ((b_in_a_.rotation.transpose() * d).cwiseAbs() - abs_r_.transpose() * ea - eb).cwiseMax(0.0);
     return std::max(std::max(gap_a.norm(), gap_b.norm()) - slack_, 0.0);
@@ -80,13 +84,13 @@ class MeshPairFrame {
     double nearest = std::numeric_limits<double>::infinity();
     double radius;
     if (leaf_a) {
-      const Vec3 c = b_in_a_.apply(b_->node_center(node_b));
-      radius = b_->node_half_extent(node_b).norm();
+      const Vec3 c = b_in_a_.apply(nb_[node_b].center());
+      radius = nb_[node_b].half_extent().norm();
       for (int k = begin_a(node_a); k <= end_a(node_a); ++k)
         nearest = std::min(nearest, (closest_point_on_triangle(c, a_->ordered_triangle(k)) - c).norm());
     } else {
-      const Vec3 c = a_in_b_.apply(a_->node_center(node_a));
-      radius = a_->node_half_extent(node_a).norm();
+      const Vec3 c = a_in_b_.apply(na_[node_a].center());
+      radius = na_[node_a].half_extent().norm();
       for (int k = begin_b(node_b); k <= end_b(node_b); ++k)
         nearest = std::min(nearest, (closest_point_on_triangle(c, b_->ordered_triangle(k)) - c).norm());
     }
@@ -94,7 +98,7 @@ class MeshPairFrame {
   }
 
   Triangle b_triangle_in_a(int ordered_b) const {
-    const Triangle& t = b_->ordered_triangle(ordered_b);
+    const Triangle t = b_->ordered_triangle(ordered_b);
     return {b_in_a_.apply(t[0]), b_in_a_.apply(t[1]), b_in_a_.apply(t[2])};
   }
 
@@ -113,11 +117,10 @@ class MeshPairFrame {
     slack_ = tolerances::kBoxSlackRelative * scale;
   }
 
-  static double diagonal_sq(const MeshBvh& m, int n) { return m.node_half_extent(n).squaredNorm(); }
-
   const MeshBvh* a_;
   const MeshBvh* b_;
-  MeshBvh::NodeView na_, nb_;
+  const BvhNode* na_;
+  const BvhNode* nb_;
   RigidTransform pose_a_;
   RigidTransform b_in_a_;
   RigidTransform a_in_b_;

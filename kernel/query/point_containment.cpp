@@ -25,7 +25,7 @@ std::optional<int> crossings(const MeshBvh& mesh, const Vec3& p, const Vec3& q, 
   for_each_leaf_along(mesh, p, q - p, 0.0, 1.0, slack, [&](int first, int last) {
     for (int k = first; k <= last; ++k) {
       if (mesh.ordered_is_degenerate(k)) continue;  // zero area: no side to cross
-      const Triangle& t = mesh.ordered_triangle(k);
+      const Triangle t = mesh.ordered_triangle(k);
       const int sp = orient3d(t[0], t[1], t[2], p), sq = orient3d(t[0], t[1], t[2], q);
       if (sp == 0) {
         // The start lies in this triangle's plane: degenerate only if it is on the triangle.

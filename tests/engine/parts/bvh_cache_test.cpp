@@ -41,8 +41,8 @@ TEST(BvhCache, ASecondMeetingLoadsTheTreeAndABadFileIsRebuilt) {
 }
 
 
-// A file of the previous format (GKBVH001: a tree of one triangle per leaf) is a valid tree, but
-// of another layout: it is rebuilt in the current one, never loaded as it is.
+// A file of an earlier format (GKBVH002 held OCCT's double node arrays, GKBVH001 trees of one
+// triangle per leaf) is never read as the current layout: it is rebuilt.
 TEST(BvhCache, AFileOfTheEarlierFormatIsRebuiltInTheCurrentOne) {
   const std::string dir = ::testing::TempDir() + "/bvh-cache-v1-" + std::to_string(::getpid());
   std::filesystem::remove_all(dir);
@@ -50,12 +50,13 @@ TEST(BvhCache, AFileOfTheEarlierFormatIsRebuiltInTheCurrentOne) {
   auto mesh = testing::share(testing::random_closed_blob(rng, 4, 40.0, 0.3, Vec3::Zero()));
   BvhCache cache(dir);
   const std::string current = cache.get_or_build(mesh).value()->serialize();
-  ASSERT_EQ(current.compare(0, 8, "GKBVH002"), 0);
-  // The same mesh's tree of one triangle per leaf, in the earlier format, where the cache looks.
+  ASSERT_EQ(current.compare(0, 8, "GKBVH003"), 0);
+  // The same mesh's tree of one triangle per leaf, labelled with the earlier format, where the
+  // cache looks.
   BvhBuildOptions one_per_leaf;
   one_per_leaf.leaf_size = 1;
   std::string old = MeshBvh::build(mesh, one_per_leaf).value()->serialize();
-  old.replace(0, 8, "GKBVH001");
+  old.replace(0, 8, "GKBVH002");
   for (const auto& entry : std::filesystem::directory_iterator(dir)) std::ofstream(entry.path(), std::ios::binary) << old;
   const auto again = cache.get_or_build(mesh).value();
   EXPECT_EQ(cache.stats().rejected, 1u);

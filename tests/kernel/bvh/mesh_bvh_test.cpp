@@ -1,4 +1,5 @@
-// The OCCT-built tree covers every triangle once, its boxes bound their contents, and a refit after
+// The tree covers every triangle once, its float boxes bound their triangles' double coordinates
+// (also at factory coordinates, where float spacing is millimetres' hundredths), and a refit after
 // the vertices move gives the same answers as a rebuild.
 #include "kernel/bvh/mesh_bvh.h"
 #include "kernel/query/mesh_collision.h"
@@ -8,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -19,23 +21,28 @@ namespace {
 using testing::Rng;
 
 void expect_tree_bounds_triangles(const MeshBvh& bvh) {
-  const MeshBvh::NodeView nodes = bvh.nodes();
   std::multiset<std::uint32_t> seen;
   for (int n = 0; n < bvh.node_count(); ++n) {
-    const auto& lo = nodes.min_point[n];
-    const auto& hi = nodes.max_point[n];
-    if (nodes.info[n].x() == 0) continue;
-    for (int k = nodes.info[n].y(); k <= nodes.info[n].z(); ++k) {
+    const BvhNode& node = bvh.node(n);
+    if (!node.is_leaf()) {
+      // Children inside their parent, compared in double (tolerance 0).
+      for (int child : {n + 1, node.second_child()})
+        for (int a = 0; a < 3; ++a) {
+          EXPECT_LE(double{node.lo[a]}, double{bvh.node(child).lo[a]});
+          EXPECT_GE(double{node.hi[a]}, double{bvh.node(child).hi[a]});
+        }
+      continue;
+    }
+    for (int k = node.first_triangle(); k <= node.last_triangle(); ++k) {
       seen.insert(bvh.mesh_triangle_index(k));
-      for (const Vec3& v : bvh.ordered_triangle(k)) {
-        // Boxes are built from the same doubles: containment is exact (tolerance 0).
-        EXPECT_LE(lo.x(), v.x());
-        EXPECT_LE(lo.y(), v.y());
-        EXPECT_LE(lo.z(), v.z());
-        EXPECT_GE(hi.x(), v.x());
-        EXPECT_GE(hi.y(), v.y());
-        EXPECT_GE(hi.z(), v.z());
-      }
+      // The tree's copy of the corners is the mesh's triangle, bit for bit.
+      EXPECT_EQ(bvh.ordered_triangle(k), bvh.mesh().triangle(bvh.mesh_triangle_index(k)));
+      for (const Vec3& v : bvh.mesh().triangle(bvh.mesh_triangle_index(k)))
+        for (int a = 0; a < 3; ++a) {
+          // Float boxes rounded outward from the doubles: containment is exact (tolerance 0).
+          EXPECT_LE(double{node.lo[a]}, v[a]);
+          EXPECT_GE(double{node.hi[a]}, v[a]);
+        }
     }
   }
   ASSERT_EQ(seen.size(), bvh.mesh().triangle_count());
@@ -49,7 +56,39 @@ TEST(MeshBvh, EveryTriangleInExactlyOneLeafInsideItsBox) {
                               {leaf_size});
     ASSERT_TRUE(bvh.ok());
     expect_tree_bounds_triangles(*bvh.value());
-    EXPECT_LE(bvh.value()->depth(), 32);
+    EXPECT_LE(bvh.value()->depth(), kMaxBvhDepth + 1);
+  }
+}
+
+// Coordinates no float can hold: at 25,000 mm floats are 2 um apart, so a box rounded to nearest
+// would cut off up to 1 um of a triangle. Jittered meshes at factory offsets, and corners placed
+// just beside float values on both sides.
+TEST(MeshBvh, FloatBoxesHoldDoubleCoordinatesAtFactoryOffsets) {
+  Rng rng(11);
+  for (double offset : {0.0, 25000.0, -25000.0, 1.0e6, 9.9e6}) {
+    for (int leaf_size : {1, 4, 7}) {
+      auto blob = testing::random_closed_blob(rng, 3, 10.0, 0.3, Vec3(offset, -offset / 3.0, offset / 7.0));
+      auto bvh = MeshBvh::build(testing::share(blob), {leaf_size});
+      ASSERT_TRUE(bvh.ok());
+      expect_tree_bounds_triangles(*bvh.value());
+    }
+    std::vector<Vec3> vertices;
+    std::vector<TriangleMesh::Face> faces;
+    std::uniform_real_distribution<double> around(-50.0, 50.0);
+    for (int i = 0; i < 300; ++i) {
+      const float f = static_cast<float>(offset + around(rng));
+      const double beside = std::nextafter(static_cast<double>(f), i % 2 ? 1e300 : -1e300);
+      const auto base = static_cast<std::uint32_t>(vertices.size());
+      vertices.push_back(Vec3(beside, static_cast<double>(f), -beside));
+      vertices.push_back(Vec3(beside + 1e-9, static_cast<double>(f) + 1.0, -beside));
+      vertices.push_back(Vec3(beside, static_cast<double>(f), -beside - 1e-9 * (i % 3)));
+      faces.push_back({base, base + 1, base + 2});
+    }
+    auto mesh = TriangleMesh::create(vertices, faces);
+    ASSERT_TRUE(mesh.ok());
+    auto bvh = MeshBvh::build(testing::share(std::move(mesh).value()));
+    ASSERT_TRUE(bvh.ok());
+    expect_tree_bounds_triangles(*bvh.value());
   }
 }
 
