@@ -94,6 +94,8 @@ class MeshPairFrame {
       for (int k = begin_b(node_b); k <= end_b(node_b); ++k)
         nearest = std::min(nearest, (closest_point_on_triangle(c, b_->ordered_triangle(k)) - c).norm());
     }
+    // A NaN (never expected, but a bound must not prune on one) counts as no bound.
+    if (!(nearest == nearest)) return box;
     return std::max(box, nearest - radius - slack_);
   }
 

@@ -18,6 +18,8 @@ Vec3 closest_point_on_triangle(const Vec3& x, const Triangle& t) {
   if (d3 >= 0.0 && d4 <= d3) return b;
   const double vc = d1 * d4 - d3 * d2;
   if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+    // d1 == d3 == 0 (a triangle tiny beside x: the products underflow): a is as good as any.
+    if (!(d1 - d3 > 0.0)) return a;
     const double v = d1 / (d1 - d3);
     return a + v * ab;
   }
@@ -26,11 +28,13 @@ Vec3 closest_point_on_triangle(const Vec3& x, const Triangle& t) {
   if (d6 >= 0.0 && d5 <= d6) return c;
   const double vb = d5 * d2 - d1 * d6;
   if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+    if (!(d2 - d6 > 0.0)) return a;
     const double w = d2 / (d2 - d6);
     return a + w * ac;
   }
   const double va = d3 * d6 - d5 * d4;
   if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+    if (!((d4 - d3) + (d5 - d6) > 0.0)) return b;
     const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
     return b + w * (c - b);
   }
@@ -96,20 +100,27 @@ void closest_points_on_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, 
 
 namespace {
 
-// Distance from the plane of t to the nearest corner of other, when all of other's corners lie
-// strictly on one side; 0 when they straddle or touch the plane.
+// A lower bound of the distance from the plane of t to the nearest corner of other, when all of
+// other's corners lie on one side; 0 when they straddle or touch the plane, or when rounding could
+// put them there. The normal of a needle-like triangle is a cross product of nearly parallel edges,
+// mostly rounding: its error (a few ulps of |e1| |e2| per component, times the corner's distance)
+// is taken off, so the bound never exceeds the true distance.
 double plane_separation(const Triangle& t, const Triangle& other) {
-  const Vec3 n = (t[1] - t[0]).cross(t[2] - t[0]);
+  const Vec3 e1 = t[1] - t[0], e2 = t[2] - t[0];
+  const Vec3 n = e1.cross(e2);
   const double len = n.norm();
   if (!(len > 0.0)) return 0.0;
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo, reach = 0.0;
   for (const Vec3& v : other) {
-    const double s = n.dot(v - t[0]);
+    const Vec3 d = v - t[0];
+    const double s = n.dot(d);
     lo = std::min(lo, s);
     hi = std::max(hi, s);
+    reach = std::max(reach, d.norm());
   }
-  if (lo > 0.0) return lo / len;
-  if (hi < 0.0) return -hi / len;
+  const double error = 16.0 * std::numeric_limits<double>::epsilon() * e1.norm() * e2.norm() * reach;
+  if (lo > error) return (lo - error) / len;
+  if (hi < -error) return (-hi - error) / len;
   return 0.0;
 }
 

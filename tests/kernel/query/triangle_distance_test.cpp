@@ -481,3 +481,59 @@ TEST(ClosestPointsOnSegments, NearlyParallelSegmentsAgainstSampling) {
 
 }  // namespace
 }  // namespace gk
+
+namespace gk {
+namespace {
+
+// Found by an adversarial review: a needle (nearly collinear, not exactly degenerate) triangle
+// whose long edge pierces a small triangle. The plane bound took the needle's normal (a cross
+// product of nearly parallel edges: rounding) at face value, claimed a gap of 0.02-0.29 mm, and the
+// exact intersection test was skipped: the pair was at 0.005 mm instead of 0, and pairs_within
+// missed it. Now the bound takes off its rounding error, so it never exceeds the true distance.
+TEST(TriangleDistance, ANeedlePiercingATriangleIsAtZeroAndItsBoundNeverExceedsTheDistance) {
+  const Triangle needle = {Vec3(0.11741428103451812, 0.94930120289264419, 0.75438530415285798),
+                           Vec3(1.6683458660739485, 1.0905727660964311, 1.6462984808653345),
+                           Vec3(1.2023123095088359, 1.0481226092510534, 1.3782908692465179)};
+  const Triangle small = {Vec3(0.89197294704258456, 1.0298957555779527, 1.2003418925090963),
+                          Vec3(0.88902775645403198, 1.0145653840706703, 1.2078914330147035),
+                          Vec3(0.89763951716608348, 1.0153498138349899, 1.1927923520034891)};
+  ASSERT_TRUE(intersect_triangles(needle, small).intersects);  // the exact test
+  EXPECT_EQ(triangle_distance_lower_bound(needle, small), 0.0);
+  EXPECT_EQ(triangle_distance(needle, small).distance, 0.0);
+  EXPECT_EQ(triangle_distance(small, needle).distance, 0.0);
+  // Random needles through random small triangles: every lower bound at most the distance, which
+  // is 0 whenever the exact test says they meet.
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int meeting = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const Vec3 p0(u(rng), u(rng), u(rng)), p1 = p0 + Vec3(10 * u(rng) + 1, u(rng), u(rng));
+    const Vec3 p2 = p0 + (p1 - p0) * (0.2 + 0.6 * u(rng));
+    const Vec3 e = p1 - p0, m = p0 + (0.3 + 0.4 * u(rng)) * e + 1e-3 * (u(rng) - 0.5) * e.unitOrthogonal();
+    const Vec3 a = e.unitOrthogonal(), b = e.normalized().cross(a);
+    const double r = 1e-2;
+    const Triangle t = {m + r * a, m + r * (-0.5 * a + 0.87 * b), m + r * (-0.5 * a - 0.87 * b)};
+    const Triangle n = {p0, p1, p2};
+    const double d = triangle_distance(n, t).distance;
+    EXPECT_LE(triangle_distance_lower_bound(n, t), d) << i;
+    if (intersect_triangles(n, t).intersects) {
+      ++meeting;
+      EXPECT_EQ(d, 0.0) << i;
+    }
+  }
+  EXPECT_GT(meeting, 1000);
+}
+
+// Also from the review: a triangle tiny beside the query point (1e-16 relative) made
+// closest_point_on_triangle divide 0 by 0, and the NaN turned a traversal's bound into +inf.
+TEST(TriangleDistance, ClosestPointOnATinyFarTriangleIsFinite) {
+  const Triangle tiny = {Vec3(1.88, 0, 0), Vec3(1.88 + 4e-13, 0, 0), Vec3(1.88, 4e-13, 0)};
+  for (const Vec3& x : {Vec3(2.2e5, 0, 0), Vec3(-2.2e5, 1e-3, 0), Vec3(1.88, 2.2e5, 0), Vec3(0, 0, 2.2e5)}) {
+    const Vec3 c = closest_point_on_triangle(x, tiny);
+    EXPECT_TRUE(c.allFinite()) << x.transpose();
+    EXPECT_NEAR((c - tiny[0]).norm(), 0.0, 1e-12);
+  }
+}
+
+}  // namespace
+}  // namespace gk
