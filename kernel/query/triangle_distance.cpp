@@ -108,19 +108,21 @@ namespace {
 double plane_separation(const Triangle& t, const Triangle& other) {
   const Vec3 e1 = t[1] - t[0], e2 = t[2] - t[0];
   const Vec3 n = e1.cross(e2);
-  const double len = n.norm();
-  if (!(len > 0.0)) return 0.0;
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo, reach = 0.0;
+  const double len_sq = n.squaredNorm();
+  if (!(len_sq > 0.0)) return 0.0;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo, reach_sq = 0.0;
   for (const Vec3& v : other) {
     const Vec3 d = v - t[0];
     const double s = n.dot(d);
     lo = std::min(lo, s);
     hi = std::max(hi, s);
-    reach = std::max(reach, d.norm());
+    reach_sq = std::max(reach_sq, d.squaredNorm());
   }
-  const double error = 16.0 * std::numeric_limits<double>::epsilon() * e1.norm() * e2.norm() * reach;
-  if (lo > error) return (lo - error) / len;
-  if (hi < -error) return (-hi - error) / len;
+  // One square root for the error, one for the length, and only when a side is clear of zero.
+  if (!(lo > 0.0) && !(hi < 0.0)) return 0.0;
+  const double error = 16.0 * std::numeric_limits<double>::epsilon() * std::sqrt(e1.squaredNorm() * e2.squaredNorm() * reach_sq);
+  if (lo > error) return (lo - error) / std::sqrt(len_sq);
+  if (hi < -error) return (-hi - error) / std::sqrt(len_sq);
   return 0.0;
 }
 
