@@ -19,9 +19,10 @@ Result<bool> check_clearance(double clearance_mm) {
 
 }  // namespace
 
-Engine::Engine(MachineRegistry& machines, PartRegistry& parts, SceneStore& scenes, EndedAudits* archive, EngineOptions options)
+Engine::Engine(MachineRegistry& machines, PartRegistry& parts, SceneStore& scenes, EndedAudits* archive, EngineOptions options,
+               AuditCheckpoints* checkpoints)
     : machines_(machines), parts_(parts), scenes_(scenes), options_(options), steps_(machines, parts, options.step_answers_kept),
-      audits_(parts, archive, options.audits) {}
+      audits_(parts, archive, options.audits, checkpoints) {}
 
 Result<ClearanceResult> Engine::clearance(const ClearanceRequest& request, const StopToken& stop) {
   return clearance_query(request, parts_, scenes_, stop);

@@ -36,8 +36,10 @@ struct PlacedMove {
 
 class Engine {
  public:
-  // archive may be null: ended audits then live in memory only.
-  Engine(MachineRegistry& machines, PartRegistry& parts, SceneStore& scenes, EndedAudits* archive, EngineOptions options = {});
+  // archive may be null: ended audits then live in memory only. checkpoints may be null: a
+  // running audit is then lost when the daemon stops (with them it resumes: resume_audits()).
+  Engine(MachineRegistry& machines, PartRegistry& parts, SceneStore& scenes, EndedAudits* archive, EngineOptions options = {},
+         AuditCheckpoints* checkpoints = nullptr);
 
   // --- ValidateStep
   StepAnswers& steps() { return steps_; }
@@ -78,12 +80,15 @@ class Engine {
   Result<std::string> start_audit(const std::string& scene_id, const AuditOptions& asked, const std::string& baseline_job_id = "");
   Result<std::shared_ptr<AuditJob>> audit(const std::string& job_id) { return audits_.get(job_id); }
   AuditJobs& audits() { return audits_; }
+  // Queues the audits a stopped or killed daemon left unfinished; returns how many.
+  std::size_t resume_audits() { return audits_.resume_unfinished(); }
 
   // --- what the daemon reports about itself
   std::uint64_t parts_stored() const { return parts_.store().count(); }
   PartRegistry::MemoryStats part_memory() const { return parts_.memory_stats(); }
 
-  // Stops the audit threads (running audits end CANCELLED and are archived).
+  // Stops the audit threads (running audits are interrupted and resume at the next start; without
+  // checkpoints they end CANCELLED and are archived).
   void stop() { audits_.stop(); }
 
  private:

@@ -35,6 +35,8 @@ PACKAGES=(
   shellcheck
   # machine model files
   libtomlplusplus-dev
+  # gatekeeper-audit: one scene's audit over the processes of an MPI job (mpiexec from openmpi-bin)
+  libopenmpi-dev openmpi-bin
   # python clients: grpcio/protobuf at run time; pip, setuptools and wheel install clients/python offline
   python3 python3-grpcio python3-protobuf python3-pip python3-setuptools python3-wheel python3-venv
   # the audit report page: three.js from npm, checked in headless Chromium

@@ -23,6 +23,7 @@
 #include "engine/parts/cad_sandbox.h"
 #include "server/access_control.h"
 #include "server/audit_archive.h"
+#include "server/audit_checkpoint_store.h"
 #include "server/gatekeeper_service.h"
 #include "server/metrics_endpoint.h"
 #include "server/request_log.h"
@@ -255,11 +256,17 @@ int main(int argc, char** argv) {
     spdlog::error("{}", archive.error().to_string());
     return 1;
   }
+  auto checkpoints = gk::server::AuditCheckpointStore::open(config.data_dir);
+  if (!checkpoints.ok()) {
+    spdlog::error("{}", checkpoints.error().to_string());
+    return 1;
+  }
   gk::engine::EngineOptions engine_options;
   engine_options.audit_threads = config.workers;
   engine_options.audits.concurrent = config.audit_jobs;
   engine_options.audits.ended_in_memory = static_cast<std::size_t>(config.audits_in_memory);
-  gk::engine::Engine engine(*machines.value(), parts, *scenes.value(), archive.value().get(), engine_options);
+  gk::engine::Engine engine(*machines.value(), parts, *scenes.value(), archive.value().get(), engine_options,
+                            checkpoints.value().get());
   gk::server::GatekeeperService service(engine, options);
 
   grpc::EnableDefaultHealthCheckService(true);
@@ -290,6 +297,8 @@ int main(int argc, char** argv) {
       std::rename((config.metrics_port_file + ".tmp").c_str(), config.metrics_port_file.c_str());
     }
   }
+  // Audits a stopped or killed daemon left running resume from their finished tiles.
+  if (const std::size_t resumed = engine.resume_audits(); resumed > 0) spdlog::info("{} unfinished audits resumed", resumed);
   server->GetHealthCheckService()->SetServingStatus(true);
   spdlog::info("gatekeeperd serving on port {} (data in {}, machine {})", port, config.data_dir,
                gk::engine::MachineRegistry::kDefaultMachine);

@@ -64,7 +64,8 @@ std::vector<AuditedObject> AuditJob::objects() const {
   return objects_;
 }
 
-void AuditJob::run(PartRegistry& parts, std::function<void(const AuditSnapshot&)> on_end) {
+void AuditJob::run(PartRegistry& parts, std::function<void(const AuditSnapshot&)> on_end,
+                   std::function<void(std::size_t, const std::vector<PairClash>&)> on_tile) {
   on_end_ = std::move(on_end);
   // The scene's objects in id order; one mesh and BVH per part, shared by every copy.
   auto placed = place_scene(scene_, parts);
@@ -156,6 +157,18 @@ void AuditJob::run(PartRegistry& parts, std::function<void(const AuditSnapshot&)
     std::optional<ClashRecord> r = final_record(c);
     if (r) update([&](AuditSnapshot& s) { s.clashes.push_back(std::move(*r)); });
   };
+  // Resumed: the finished tiles are not computed again; their clashes are known from the start.
+  std::vector<PairClash> resumed;
+  for (const auto& [tile, clashes] : finished_tiles_) {
+    options.skip_tiles.push_back(tile);
+    for (const PairClash& c : clashes) {
+      if (c.a >= objects.size() || c.b >= objects.size() || c.a >= c.b)
+        return fail(Error{ErrorCode::kInternal, "checkpoint", "a resumed tile names objects this snapshot does not have"});
+      resumed.push_back(c);
+      options.on_clash(c);
+    }
+  }
+  options.on_tile_done = on_tile;
   Result<AuditResult> result = Error{};
   if (baseline_) {
     // Re-audit: objects new or changed since the baseline's snapshot are recomputed; the
@@ -187,7 +200,12 @@ void AuditJob::run(PartRegistry& parts, std::function<void(const AuditSnapshot&)
     result = audit_scene(objects, options);
   }
   if (!result.ok()) return fail(result.error());
-  const AuditResult& r = result.value();
+  AuditResult& r = result.value();
+  if (!resumed.empty()) {
+    r.clashes.insert(r.clashes.end(), resumed.begin(), resumed.end());
+    std::sort(r.clashes.begin(), r.clashes.end(),
+              [](const PairClash& l, const PairClash& x) { return std::tie(l.a, l.b) < std::tie(x.a, x.b); });
+  }
   std::vector<ClashRecord> ordered;
   for (const PairClash& c : r.clashes)
     if (std::optional<ClashRecord> record = final_record(c)) ordered.push_back(std::move(*record));
@@ -201,7 +219,9 @@ void AuditJob::run(PartRegistry& parts, std::function<void(const AuditSnapshot&)
     s.broad_s = r.times.broad_s;
     s.narrow_s = r.times.narrow_s;
     s.status = r.cancelled ? AuditStatus::kCancelled : AuditStatus::kDone;
-    s.message = r.cancelled ? "cancelled; the clashes of the pairs finished are kept" : "";
+    s.message = !r.cancelled      ? ""
+                : interrupted_ ? "interrupted by the daemon's stop; it resumes from its finished tiles when the daemon starts again"
+                               : "cancelled; the clashes of the pairs finished are kept";
   });
 }
 

@@ -64,9 +64,21 @@ class AuditJob {
   // merge, contacts kept): a re-audit may reuse a baseline's answers only when they are equal.
   // (Tiles and threads change how the work is split, never the answers.)
   std::vector<std::string> answer_options() const;
-  // on_end sees the final state before it is published (the daemon archives it there).
-  void run(PartRegistry& parts, std::function<void(const AuditSnapshot&)> on_end = {});
+  // on_end sees the final state before it is published (the daemon archives it there); on_tile
+  // each finished tile (for checkpoints: scene_audit's on_tile_done).
+  void run(PartRegistry& parts, std::function<void(const AuditSnapshot&)> on_end = {},
+           std::function<void(std::size_t, const std::vector<PairClash>&)> on_tile = {});
+  // Before run: tiles an earlier run of this job finished (from its checkpoint), not computed again.
+  void resume_from(std::map<std::size_t, std::vector<PairClash>> finished_tiles) { finished_tiles_ = std::move(finished_tiles); }
   void cancel() { cancelled_ = true; }
+  // The daemon is stopping: the job ends like a cancelled one, but is marked interrupted, so that
+  // its checkpoint is kept and it resumes when the daemon starts again.
+  void interrupt() {
+    interrupted_ = true;
+    cancelled_ = true;
+  }
+  bool interrupted() const { return interrupted_; }
+  const AuditOptions& options() const { return options_; }
   // The job's run threw: it ends FAILED with this message (unless it had ended already).
   void fail_unexpectedly(const std::string& message);
   AuditSnapshot snapshot() const;
@@ -92,6 +104,8 @@ class AuditJob {
   std::vector<std::string> restored_answer_options_;  // for a restored job (its options are not kept)
   std::shared_ptr<const AuditJob> baseline_;
   std::atomic<bool> cancelled_{false};
+  std::atomic<bool> interrupted_{false};
+  std::map<std::size_t, std::vector<PairClash>> finished_tiles_;
   std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
   mutable std::mutex mutex_;
   mutable std::condition_variable changed_;

@@ -4,9 +4,9 @@
 
 namespace gk::engine {
 
-AuditJobs::AuditJobs(PartRegistry& parts, EndedAudits* archive, Options options)
+AuditJobs::AuditJobs(PartRegistry& parts, EndedAudits* archive, Options options, AuditCheckpoints* checkpoints)
     : parts_(parts), archive_(archive), ended_in_memory_(std::max<std::size_t>(1, options.ended_in_memory)),
-      pool_(options.concurrent, options.queued) {}
+      checkpoints_(archive ? checkpoints : nullptr), pool_(options.concurrent, options.queued) {}
 
 AuditJobs::~AuditJobs() {
   cancel_all();
@@ -14,7 +14,12 @@ AuditJobs::~AuditJobs() {
 }
 
 void AuditJobs::stop() {
-  cancel_all();
+  if (checkpoints_) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (auto& [id, job] : jobs_) job->interrupt();
+  } else {
+    cancel_all();
+  }
   pool_.stop();
 }
 
@@ -40,25 +45,83 @@ Result<std::string> AuditJobs::start(const SceneRecord& scene, const AuditOption
   }
   auto job = std::make_shared<AuditJob>(scene, options, baseline);
   const std::string id = add(job);
-  const bool queued = pool_.try_submit([this, job, id] {
+  if (checkpoints_) {
+    auto begun = checkpoints_->begin(id, scene, options, baseline_id);
+    if (!begun.ok()) spdlog::warn("audit {} has no checkpoint (it cannot resume after a stop): {}", id, begun.error().to_string());
+  }
+  if (!submit(id, job)) {
+    remove(id);
+    if (checkpoints_) (void)checkpoints_->forget(id);
+    return Error{ErrorCode::kResourceExhausted, "audit", "audit queue full: retry later"};
+  }
+  return id;
+}
+
+bool AuditJobs::submit(const std::string& id, std::shared_ptr<AuditJob> job) {
+  return pool_.try_submit([this, job, id] {
     try {
-      job->run(parts_, [&](const AuditSnapshot& final_state) {
-        if (!archive_) return;
-        auto saved = archive_->save(id, *job, final_state);
-        if (!saved.ok()) spdlog::warn("audit {} not archived (kept in memory): {}", id, saved.error().to_string());
-        else archived(id);
-      });
+      job->run(
+          parts_,
+          [&](const AuditSnapshot& final_state) {
+            if (!archive_) return;
+            // Interrupted by the daemon's stop: kept for resuming, not archived as ended.
+            if (checkpoints_ && job->interrupted() && final_state.status == AuditStatus::kCancelled) return;
+            auto saved = archive_->save(id, *job, final_state);
+            if (!saved.ok()) {
+              spdlog::warn("audit {} not archived (kept in memory): {}", id, saved.error().to_string());
+              return;
+            }
+            archived(id);
+            if (checkpoints_) {
+              auto gone = checkpoints_->forget(id);
+              if (!gone.ok()) spdlog::warn("audit {}: its checkpoint stays: {}", id, gone.error().to_string());
+            }
+          },
+          [&](std::size_t tile, const std::vector<PairClash>& clashes) {
+            if (!checkpoints_) return;
+            auto kept = checkpoints_->tile_done(id, tile, clashes);
+            if (!kept.ok()) spdlog::warn("audit {}: tile {} not checkpointed: {}", id, tile, kept.error().to_string());
+          });
     } catch (const std::exception& e) {
       job->fail_unexpectedly(e.what());
     } catch (...) {
       job->fail_unexpectedly("unexpected error of unknown type");
     }
   });
-  if (!queued) {
-    remove(id);
-    return Error{ErrorCode::kResourceExhausted, "audit", "audit queue full: retry later"};
+}
+
+std::size_t AuditJobs::resume_unfinished() {
+  if (!checkpoints_) return 0;
+  auto unfinished = checkpoints_->unfinished();
+  if (!unfinished.ok()) {
+    spdlog::warn("unfinished audits cannot be read: {}", unfinished.error().to_string());
+    return 0;
   }
-  return id;
+  std::size_t queued = 0;
+  for (UnfinishedAudit& u : unfinished.value()) {
+    std::shared_ptr<const AuditJob> baseline;
+    if (!u.baseline_job_id.empty()) {
+      auto base = get(u.baseline_job_id);
+      if (base.ok()) baseline = base.value();
+    }
+    auto job = std::make_shared<AuditJob>(u.scene, u.options, baseline);
+    const std::size_t finished = u.tiles.size();
+    // A re-audit whose baseline cannot be read any more is done as a full audit (whose answer a
+    // re-audit equals), from scratch: its tiles were the re-audit's.
+    if (u.baseline_job_id.empty() || baseline) job->resume_from(std::move(u.tiles));
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      jobs_[u.job_id] = job;
+    }
+    if (submit(u.job_id, job)) {
+      ++queued;
+      spdlog::info("audit {} resumed from {} finished tiles", u.job_id, finished);
+    } else {
+      remove(u.job_id);
+      spdlog::warn("audit {} not resumed: the audit queue is full; its checkpoint stays for the next start", u.job_id);
+    }
+  }
+  return queued;
 }
 
 void AuditJobs::archived(const std::string& id) {

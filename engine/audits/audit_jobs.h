@@ -1,6 +1,7 @@
 // The audit jobs of a daemon: running ones in memory, ended ones kept by an EndedAudits store.
 #pragma once
 
+#include "engine/audits/audit_checkpoints.h"
 #include "engine/audits/audit_job.h"
 #include "engine/audits/ended_audits.h"
 #include "engine/parts/part_registry.h"
@@ -27,8 +28,9 @@ class AuditJobs {
     int concurrent = 1;                // audits run at once, on their own threads
     std::size_t queued = 16;           // audits waiting; beyond, start() is refused (kResourceExhausted)
   };
-  // archive may be null (nothing is then dropped: an ended job lives only in memory).
-  AuditJobs(PartRegistry& parts, EndedAudits* archive, Options options);
+  // archive may be null (nothing is then dropped: an ended job lives only in memory); checkpoints
+  // may be null (a running job is then lost when the daemon stops).
+  AuditJobs(PartRegistry& parts, EndedAudits* archive, Options options, AuditCheckpoints* checkpoints = nullptr);
   ~AuditJobs();
 
   // A new audit of `scene` with `options`, or a re-audit against the finished job baseline_id
@@ -39,20 +41,28 @@ class AuditJobs {
   // The job ended and is safely archived: from now on it may be dropped from memory.
   void archived(const std::string& id);
   void remove(const std::string& id);
-  // Every job still running stops (the daemon is stopping): each ends CANCELLED with the pairs it
-  // finished, archived like any ended job.
+  // Every job still running stops: each ends CANCELLED with the pairs it finished, archived like
+  // any ended job.
   void cancel_all();
-  // Stops the audit threads (after cancel_all: what runs ends CANCELLED and is archived).
+  // Stops the audit threads (the daemon is stopping). With checkpoints, what runs is interrupted:
+  // not archived, its checkpoint kept, resumed by resume_unfinished() at the next start; without,
+  // it ends CANCELLED and is archived.
   void stop();
+  // Queues again every audit the checkpoints hold (a daemon stopped or killed while they ran),
+  // under their old ids, skipping their finished tiles. Returns how many were queued.
+  std::size_t resume_unfinished();
   Result<std::shared_ptr<AuditJob>> get(const std::string& id);
   std::size_t in_memory() const;
   std::size_t running() const;  // started and not ended (those waiting for an audit thread too)
 
  private:
   void drop_beyond_limit();  // mutex_ held
+  // Queues a job under id: runs it, checkpoints its tiles, archives it when it ends.
+  bool submit(const std::string& id, std::shared_ptr<AuditJob> job);
   PartRegistry& parts_;
   EndedAudits* archive_;
   const std::size_t ended_in_memory_;
+  AuditCheckpoints* checkpoints_;
   mutable std::mutex mutex_;
   std::map<std::string, std::shared_ptr<AuditJob>> jobs_;
   std::list<std::string> ended_;  // archived jobs in memory, least recently read first

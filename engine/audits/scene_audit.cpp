@@ -151,6 +151,7 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
   // ---- broad phase, per tile ----
   const auto t_broad = Clock::now();
   std::vector<IndexPair> candidates;
+  std::vector<std::size_t> owner;  // the tile owning each candidate (0 for a re-audit)
   std::mutex report_mutex;
   AuditProgress progress;
   auto last_report = Clock::now();
@@ -183,6 +184,7 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
         if (other != id && (!wanted[other] || other > id)) candidates.emplace_back(std::min(id, other), std::max(id, other));
     std::sort(candidates.begin(), candidates.end());
     candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    owner.assign(candidates.size(), 0);
     result.tiles = 1;
   } else {
     Aabb scene;
@@ -237,31 +239,72 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
     });
     // Cancelled during the broad phase, the candidates are incomplete: never a report of "no clash".
     broad_phase_cancelled = options.cancel && options.cancel->load();
-    for (auto& v : per_tile) candidates.insert(candidates.end(), v.begin(), v.end());
-    std::sort(candidates.begin(), candidates.end());
+    // Tile by tile, each tile's pairs in (a, b) order.
+    for (std::size_t t = 0; t < per_tile.size(); ++t) {
+      std::sort(per_tile[t].begin(), per_tile[t].end());
+      candidates.insert(candidates.end(), per_tile[t].begin(), per_tile[t].end());
+      owner.insert(owner.end(), per_tile[t].size(), t);
+    }
   }
-  // Intended contacts never reach the narrow phase.
+  // Intended contacts never reach the narrow phase; nor do the pairs of tiles a checkpoint holds.
+  std::vector<char> skipped(result.tiles, 0);
+  for (std::size_t t : options.skip_tiles)
+    if (t < skipped.size()) skipped[t] = 1;
   std::vector<IndexPair> work;
-  for (const IndexPair& p : candidates) {
-    if (matching_rule(options.rules, objects[p.first], objects[p.second]) >= 0) ++result.excluded_by_rules;
-    else work.push_back(p);
+  std::vector<std::size_t> work_tile;
+  std::size_t done_before = 0;
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    const IndexPair& p = candidates[i];
+    if (matching_rule(options.rules, objects[p.first], objects[p.second]) >= 0) {
+      ++result.excluded_by_rules;
+    } else if (skipped[owner[i]]) {
+      ++done_before;
+    } else {
+      work.push_back(p);
+      work_tile.push_back(owner[i]);
+    }
   }
   result.candidate_pairs = candidates.size();
   result.times.broad_s = seconds_since(t_broad);
 
-  // ---- narrow phase: the costliest pairs first ----
+  // ---- narrow phase: tile by tile, the costliest tiles and pairs first ----
   const auto t_narrow = Clock::now();
-  std::vector<std::size_t> order(work.size());
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
   auto cost = [&](std::size_t i) {
     return objects[work[i].first].mesh->mesh().triangle_count() + objects[work[i].second].mesh->mesh().triangle_count();
   };
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t l, std::size_t r) { return cost(l) > cost(r); });
+  std::vector<double>& tile_cost = result.tile_costs;
+  tile_cost.assign(result.tiles, 0.0);
+  std::vector<std::size_t> tile_left(result.tiles, 0);  // pairs not yet done, per tile
+  for (std::size_t i = 0; i < work.size(); ++i) {
+    tile_cost[work_tile[i]] += static_cast<double>(cost(i));
+    ++tile_left[work_tile[i]];
+  }
+  // Skipped tiles' costs too, so every process of a distributed audit plans the same.
+  for (std::size_t i = 0; i < candidates.size(); ++i)
+    if (skipped[owner[i]] && matching_rule(options.rules, objects[candidates[i].first], objects[candidates[i].second]) < 0)
+      tile_cost[owner[i]] += static_cast<double>(objects[candidates[i].first].mesh->mesh().triangle_count() +
+                                                 objects[candidates[i].second].mesh->mesh().triangle_count());
+  if (options.broad_phase_only) {
+    result.times.total_s = seconds_since(t0);
+    return result;
+  }
+  std::vector<std::size_t> order(work.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t l, std::size_t r) {
+    const std::size_t tl = work_tile[l], tr = work_tile[r];
+    if (tl != tr) return tile_cost[tl] != tile_cost[tr] ? tile_cost[tl] > tile_cost[tr] : tl < tr;
+    return cost(l) > cost(r);
+  });
+  // Each tile's work indices, for handing over its clashes when it is done.
+  std::vector<std::vector<std::size_t>> tile_work(options.on_tile_done ? result.tiles : 0);
+  if (options.on_tile_done)
+    for (std::size_t i = 0; i < work.size(); ++i) tile_work[work_tile[i]].push_back(i);
   std::vector<PairClash> slots(work.size());
   std::vector<char> state(work.size(), 0);  // 0 not done, 1 done no clash, 2 clash
-  progress.pairs_total = work.size();
+  progress.pairs_total = work.size() + done_before;
+  progress.pairs_done = done_before;
   report(true);
-  std::atomic<std::size_t> done{0}, clashes{0};
+  std::atomic<std::size_t> done{done_before}, clashes{0};
   parallel_for(order.size(), options.threads, [&](std::size_t k) {
     if (options.cancel && options.cancel->load()) return;
     const std::size_t i = order[k];
@@ -276,6 +319,16 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
       std::lock_guard<std::mutex> lock(report_mutex);
       options.on_clash(c);
     }
+    if (options.on_tile_done) {
+      std::lock_guard<std::mutex> lock(report_mutex);
+      const std::size_t t = work_tile[i];
+      if (--tile_left[t] == 0) {
+        std::vector<PairClash> found;
+        for (std::size_t j : tile_work[t])  // in (a, b) order: the tile's work was listed so
+          if (state[j] == 2) found.push_back(slots[j]);
+        options.on_tile_done(t, found);
+      }
+    }
     if (options.on_progress) {
       {
         std::lock_guard<std::mutex> lock(report_mutex);
@@ -287,8 +340,11 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
   });
   for (std::size_t i = 0; i < work.size(); ++i)
     if (state[i] == 2) result.clashes.push_back(std::move(slots[i]));
+  // Tile order is not (a, b) order when the tiles are several.
+  std::sort(result.clashes.begin(), result.clashes.end(),
+            [](const PairClash& l, const PairClash& r) { return std::tie(l.a, l.b) < std::tie(r.a, r.b); });
   result.pairs_done = done;
-  result.cancelled = broad_phase_cancelled || done < work.size();
+  result.cancelled = broad_phase_cancelled || done < work.size() + done_before;
   result.times.narrow_s = seconds_since(t_narrow);
   result.times.total_s = seconds_since(t0);
   progress.pairs_done = done;

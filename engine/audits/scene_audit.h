@@ -5,9 +5,10 @@
 //     tile its box meets (a "ghost" in all but one). Each tile runs its own broad phase, and a pair
 //     is kept only by the tile holding the low corner of the two boxes' intersection, so a pair
 //     crossing tile borders is audited once and no global pair set is needed.
-//  2. Two levels of parallelism: tiles are spread over the threads; then the candidate pairs,
-//     sorted by cost (largest first, so no thread is left with a giant pair at the end), are
-//     pulled by the threads one at a time.
+//  2. Two levels of parallelism: tiles are spread over the threads; then the candidate pairs are
+//     pulled by the threads one at a time, tile by tile (the costliest tiles first, and in a tile
+//     the costliest pairs first, so no thread is left with a giant pair at the end). A tile whose
+//     pairs are all done is reported (on_tile_done): a checkpoint a resumed audit skips.
 //  3. Per pair: the exact verdict (kernel/query/contact_verdict), contact locations grouped into clash
 //     regions, clearance violations for a gap, and the penetration depth on request.
 // Results are in pair order whatever the tiling or thread count, so runs are reproducible.
@@ -92,6 +93,17 @@ struct AuditOptions {
   std::function<void(const AuditProgress&)> on_progress;  // called from worker threads, serialised
   std::function<void(const PairClash&)> on_clash;          // each clash as found (any order), serialised
   double progress_interval_s = 0.2;
+  // Checkpoints. A tile is numbered by its place in the floor plan, the same in every run of the
+  // same objects with the same tile_mm and clearance. When every pair a tile owns is done, its
+  // clashes (in (a, b) order; none for a clear tile) are handed over, serialised with the other
+  // calls; not for a tile cut short by cancellation, and not for tiles without pairs.
+  std::function<void(std::size_t tile, const std::vector<PairClash>& clashes)> on_tile_done;
+  // Tiles a checkpoint holds: their pairs are not computed again and their clashes are not in the
+  // result (the caller adds the checkpoint's); they count as done.
+  std::vector<std::size_t> skip_tiles;
+  // Stop after the broad phase: the result has the tiles, the candidate pairs and each tile's
+  // cost, and no clash (how a distributed audit plans which process takes which tiles).
+  bool broad_phase_only = false;
 };
 
 struct AuditTimes {
@@ -103,6 +115,9 @@ struct AuditResult {
   std::size_t objects = 0, triangles = 0;  // triangles counted per instance
   std::size_t tiles = 0, candidate_pairs = 0, excluded_by_rules = 0, pairs_done = 0;
   std::size_t ghost_entries = 0;         // object-in-tile entries beyond the first
+  // Per tile, the estimated cost of its pairs (the sum over its pairs of both meshes' triangle
+  // counts; 0: no pair to audit), skipped tiles included.
+  std::vector<double> tile_costs;
   bool cancelled = false;                // then clashes cover the pairs_done pairs finished
   AuditTimes times;
 };

@@ -1,5 +1,7 @@
 #include "engine/parts/bvh_cache.h"
 
+#include <unistd.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -41,7 +43,8 @@ Result<std::shared_ptr<MeshBvh>> BvhCache::get_or_build(std::shared_ptr<const Tr
   ++built_;
   // Whole file, then rename: a reader never sees half of one.
   std::ostringstream tmp_name;
-  tmp_name << path << ".tmp." << std::this_thread::get_id();
+  // Process and thread: ranks of an MPI audit share the cache directory.
+  tmp_name << path << ".tmp." << ::getpid() << "." << std::this_thread::get_id();
   {
     std::ofstream out(tmp_name.str(), std::ios::binary | std::ios::trunc);
     const std::string bytes = built.value()->serialize();

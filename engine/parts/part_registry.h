@@ -32,11 +32,11 @@ class PartRegistry {
   PartRegistry(PartStore& store, const std::string& bvh_cache_dir, std::size_t memory_budget_bytes = kDefaultPartMemoryBytes)
       : store_(store), bvh_cache_(bvh_cache_dir), memory_budget_bytes_(memory_budget_bytes) {}
   static constexpr std::size_t kDefaultPartMemoryBytes = 8ull << 30;
-  // A loaded part's memory, estimated from its triangles: 350 bytes per triangle plus 24 per vertex
-  // is above what a mesh with its BVH was measured to keep (114-218 bytes per triangle, vertices
-  // included, with trees of 4 triangles per leaf: kernel_fcl_table in docs/PERFORMANCE.md), so
-  // the budget errs towards dropping parts early, never towards exceeding it.
-  static constexpr std::size_t kBytesPerTriangle = 350;
+  // A loaded part's memory, estimated from its triangles: 150 bytes per triangle plus 24 per vertex
+  // is above what a mesh with its BVH was measured to keep (71-97 bytes per triangle, vertices
+  // included, with the compact tree: kernel_fcl_table in docs/PERFORMANCE.md), so the budget errs
+  // towards dropping parts early, never towards exceeding it.
+  static constexpr std::size_t kBytesPerTriangle = 150;
 
   struct MemoryStats {
     std::size_t parts = 0, bytes = 0, evicted = 0;

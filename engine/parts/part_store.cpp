@@ -125,6 +125,15 @@ Result<std::unique_ptr<PartStore>> PartStore::open(const std::string& directory)
   return store;
 }
 
+Result<std::unique_ptr<PartStore>> PartStore::open_read_only(const std::string& directory) {
+  std::unique_ptr<PartStore> store(new PartStore());
+  store->dir_ = directory;
+  if (sqlite3_open_v2((directory + "/gatekeeper.sqlite").c_str(), &store->db_, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK)
+    return storage_error("cannot open the part database in " + directory + " for reading");
+  sqlite3_busy_timeout(store->db_, 5000);
+  return store;
+}
+
 PartStore::~PartStore() {
   if (db_) sqlite3_close(db_);
 }

@@ -53,6 +53,9 @@ class PartUpload {
 class PartStore {
  public:
   static Result<std::unique_ptr<PartStore>> open(const std::string& directory);
+  // For a batch program reading a daemon's data directory beside it (the MPI audit driver): reads
+  // only, and leaves the temporary files of the daemon's uploads in progress alone.
+  static Result<std::unique_ptr<PartStore>> open_read_only(const std::string& directory);
   ~PartStore();
 
   static constexpr std::uint64_t kMaxPartBytes = 2ull << 30;  // 2 GiB

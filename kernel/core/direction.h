@@ -17,6 +17,13 @@ class Direction {
     if (!std::isfinite(n) || !(n > 0.0)) return std::nullopt;
     return Direction(v / n);
   }
+  // A direction kept earlier (a checkpoint, an archive) back bit for bit: accepted as it is when
+  // its length is 1 to rounding, refused otherwise (never normalised again, which could move it).
+  static std::optional<Direction> restored(const Vec3& unit) {
+    const double n = unit.norm();
+    if (!std::isfinite(n) || !(std::fabs(n - 1.0) <= 1e-12)) return std::nullopt;
+    return Direction(unit);
+  }
   const Vec3& vector() const { return unit_; }
   double x() const { return unit_.x(); }
   double y() const { return unit_.y(); }

@@ -5,11 +5,13 @@
 #include "kernel/bvh/mesh_bvh.h"
 #include "engine/audits/scene_audit.h"
 #include "mesh_io/mesh_file_reader.h"
+#include "clients/gatekeeper_client/audit_report.h"
 #include "tests/server/daemon_fixture.h"
 #include "tests/support/random_meshes.h"
 
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sqlite3.h>
 
 #include <cstdio>
 #include <algorithm>
@@ -20,6 +22,8 @@
 #include <set>
 #include <tuple>
 #include <cmath>
+#include <sstream>
+#include <thread>
 
 namespace gk {
 namespace {
@@ -385,6 +389,132 @@ TEST(AuditE2E, PutObjectsStoresAWholeBatchOrNothingAndItSurvivesKill9) {
   std::set<std::string> groups;
   for (const pb::SceneObject& o : scene.objects()) groups.insert(o.group());
   EXPECT_EQ(groups, (std::set<std::string>{"even", "odd"}));
+}
+
+// A closed UV sphere of radius r (mm) with about 2 * rings * segments triangles, as OBJ text.
+std::string sphere_obj(double r, int rings, int segments) {
+  std::ostringstream out;
+  out.precision(17);
+  out << "v 0 0 " << r << "\n";
+  for (int i = 1; i < rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      const double th = M_PI * i / rings, ph = 2.0 * M_PI * j / segments;
+      out << "v " << r * std::sin(th) * std::cos(ph) << " " << r * std::sin(th) * std::sin(ph) << " " << r * std::cos(th) << "\n";
+    }
+  out << "v 0 0 " << -r << "\n";
+  auto at = [&](int i, int j) { return 2 + (i - 1) * segments + (j % segments); };  // OBJ is 1-based
+  const int south = 2 + (rings - 1) * segments;
+  for (int j = 0; j < segments; ++j) out << "f 1 " << at(1, j) << " " << at(1, j + 1) << "\n";
+  for (int i = 1; i < rings - 1; ++i)
+    for (int j = 0; j < segments; ++j) {
+      out << "f " << at(i, j) << " " << at(i + 1, j) << " " << at(i + 1, j + 1) << "\n";
+      out << "f " << at(i, j) << " " << at(i + 1, j + 1) << " " << at(i, j + 1) << "\n";
+    }
+  for (int j = 0; j < segments; ++j) out << "f " << at(rings - 1, j) << " " << south << " " << at(rings - 1, j + 1) << "\n";
+  return out.str();
+}
+
+// Rows in the daemon's checkpoint table of finished tiles (read beside the running daemon).
+long long checkpointed_tiles(const std::string& dir) {
+  sqlite3* db = nullptr;
+  long long n = -1;
+  if (sqlite3_open_v2((dir + "/gatekeeper.sqlite").c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK) {
+    sqlite3_busy_timeout(db, 2000);
+    sqlite3_stmt* stmt = nullptr;
+    if (sqlite3_prepare_v2(db, "SELECT COUNT(*) FROM audit_tiles", -1, &stmt, nullptr) == SQLITE_OK && sqlite3_step(stmt) == SQLITE_ROW)
+      n = sqlite3_column_int64(stmt, 0);
+    sqlite3_finalize(stmt);
+  }
+  sqlite3_close(db);
+  return n;
+}
+
+// The report of a job that is already running, once it has ended.
+pb::AuditReport report_when_ended(pb::Gatekeeper::Stub& stub, const std::string& job_id) {
+  grpc::ClientContext wctx;
+  pb::WatchAuditRequest watch;
+  watch.set_job_id(job_id);
+  auto reader = stub.WatchAudit(&wctx, watch);
+  pb::AuditProgress progress;
+  while (reader->Read(&progress)) {
+  }
+  EXPECT_TRUE(reader->Finish().ok());
+  pb::AuditReport report;
+  EXPECT_TRUE(client::read_audit_report(stub, job_id, &report, client::ReportOptions{}).ok());
+  return report;
+}
+
+// A nightly audit stopped part way (kill -9, or a stop) resumes when the daemon starts again,
+// from the tiles it had finished (checkpointed in its database), under the same job id; its
+// report equals an audit that ran without interruption, clash for clash and bit for bit.
+TEST(AuditE2E, AnAuditStoppedPartWayResumesFromItsTilesAndEqualsAnUninterruptedOne) {
+  for (int signal_number : {SIGKILL, SIGTERM}) {
+    const std::string dir = testing::temp_dir(signal_number == SIGKILL ? "audit-resume-kill" : "audit-resume-term");
+    std::string job_id;
+    pb::StartAuditRequest start;
+    long long tiles_before = 0;
+    {
+      Daemon daemon(dir);
+      auto stub = daemon.stub();
+      // 16 spheres of 7,200 triangles in a row, each overlapping the next by 40 mm, one pair per
+      // 1.5 m tile; the depth makes each pair take a noticeable time.
+      const std::string ball = upload(*stub, sphere_obj(500.0, 60, 60), "obj");
+      grpc::ClientContext cctx;
+      pb::SceneInfo scene;
+      ASSERT_TRUE(stub->CreateScene(&cctx, pb::CreateSceneRequest(), &scene).ok());
+      pb::PutObjectsRequest batch;
+      batch.set_scene_id(scene.scene_id());
+      for (int i = 0; i < 16; ++i) {
+        pb::SceneObject* o = batch.add_objects();
+        o->set_name("ball" + std::to_string(i));
+        o->set_category("ball");
+        o->set_part_id(ball);
+        *o->mutable_pose() = pose_of({"", "", "", "", Vec3(960.0 * i, 0, 0), 7.0 * i});
+      }
+      pb::PutObjectsResponse ids;
+      grpc::ClientContext pctx;
+      ASSERT_TRUE(stub->PutObjects(&pctx, batch, &ids).ok());
+      start.set_scene_id(scene.scene_id());
+      start.set_clearance_mm(1.0);
+      start.set_tile_mm(1500.0);
+      start.set_threads(1);
+      start.set_compute_depth(true);
+      pb::AuditJob job;
+      grpc::ClientContext sctx;
+      ASSERT_TRUE(stub->StartAudit(&sctx, start, &job).ok());
+      job_id = job.job_id();
+      const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+      while ((tiles_before = checkpointed_tiles(dir)) < 3 && std::chrono::steady_clock::now() < give_up)
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      ASSERT_GE(tiles_before, 3);
+      daemon.stop(signal_number);
+    }
+    const long long tiles_at_stop = checkpointed_tiles(dir);
+    ASSERT_GE(tiles_at_stop, tiles_before);
+    ASSERT_LT(tiles_at_stop, 15) << "the audit ended before it was stopped: nothing to resume";
+    Daemon daemon(dir, {"--log-level", "info", "--log-file", dir + "/gatekeeperd.log"});
+    auto stub = daemon.stub();
+    const pb::AuditReport resumed = report_when_ended(*stub, job_id);
+    EXPECT_EQ(resumed.progress().state(), pb::DONE);
+    EXPECT_EQ(checkpointed_tiles(dir), 0);  // ended and archived: its checkpoint is gone
+    const pb::AuditReport fresh = testing::run_audit(*stub, start);
+    ASSERT_EQ(fresh.progress().state(), pb::DONE);
+    EXPECT_NE(fresh.progress().job_id(), job_id);
+    ASSERT_EQ(resumed.clashes_size(), 15);
+    ASSERT_EQ(fresh.clashes_size(), 15);
+    for (int i = 0; i < fresh.clashes_size(); ++i) {
+      EXPECT_GT(fresh.clashes(i).depth_mm(), 0.0);
+      EXPECT_EQ(resumed.clashes(i).SerializeAsString(), fresh.clashes(i).SerializeAsString()) << "clash " << i;
+    }
+    EXPECT_EQ(resumed.candidate_pairs(), fresh.candidate_pairs());
+    EXPECT_EQ(resumed.objects(), fresh.objects());
+    EXPECT_EQ(resumed.triangles(), fresh.triangles());
+    EXPECT_EQ(resumed.progress().pairs_done(), fresh.progress().pairs_done());
+    // The resumed run took the finished tiles from the checkpoint.
+    const std::string log = testing::read_file(dir + "/gatekeeperd.log");
+    EXPECT_NE(log.find("audit " + job_id + " resumed from " + std::to_string(tiles_at_stop) + " finished tiles"), std::string::npos)
+        << log;
+  }
 }
 
 TEST(AuditE2E, EndedAuditsSurviveKill9AndStayUsableAsBaselines) {

@@ -616,8 +616,10 @@ TEST(HostileClientE2E, SigtermDoesNotWaitForARunningAudit) {
     EXPECT_EQ(daemon.stop(SIGTERM), 0);
     EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 1.0 + 3.0 * testing::kTimeScale);
   }
+  // Interrupted by the stop, not ended: the next start resumes it under the same id.
   Daemon again(dir);
-  EXPECT_EQ(audit_state(*again.stub(), id).state(), pb::CANCELLED);
+  const pb::AuditState state = audit_state(*again.stub(), id).state();
+  EXPECT_TRUE(state == pb::RUNNING || state == pb::DONE) << pb::AuditState_Name(state);
 }
 
 // A MoveObject whose deadline passes stops computing the moved object's contacts: the one scene

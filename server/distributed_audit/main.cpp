@@ -1,0 +1,234 @@
+// gatekeeper-audit: an audit of one scene spread over the processes of an MPI job.
+//
+//   mpiexec -n N gatekeeper-audit --data-dir DIR --scene SCENE --work-dir SHARED --out report.json
+//
+// Every process opens the daemon's data directory for reading (scenes, parts, the BVH cache: on
+// storage all of them see), runs the same broad phase and so the same plan of tiles
+// (engine/audits/tile_plan: costliest tile to the least loaded process), and audits its own
+// tiles. Each finished tile is written to the shared work directory (written whole, synced,
+// renamed), which is also the checkpoint: run the same command again after a failure (a killed
+// process ends the whole MPI job) and only the tiles without a file are computed. Process 0 then
+// merges every tile's clashes in the canonical (object, object) order of the single-process audit
+// and writes the report. Clashes are the kernel's answers on the triangles: a pair with a CAD part
+// within its tessellation's deflection is reported (conservatively), not decided again on the
+// exact faces as the daemon's audit does.
+#include "engine/audits/audit_request.h"
+#include "engine/audits/scene_audit.h"
+#include "engine/audits/tile_plan.h"
+#include "engine/parts/part_registry.h"
+#include "engine/parts/part_store.h"
+#include "engine/scenes/placed_scene.h"
+#include "engine/scenes/scene_store.h"
+#include "server/audit_checkpoint_store.h"
+
+#include <CLI/CLI.hpp>
+#include <mpi.h>
+#include <nlohmann/json.hpp>
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace gk;
+
+std::string tile_path(const std::string& work_dir, std::size_t tile) { return work_dir + "/tile-" + std::to_string(tile) + ".bin"; }
+
+// Whole, synced, then renamed: a reader never sees half a tile.
+bool write_whole(const std::string& path, const std::string& bytes) {
+  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  if (fd < 0) return false;
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n <= 0) {
+      ::close(fd);
+      return false;
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  const bool synced = ::fsync(fd) == 0;
+  ::close(fd);
+  return synced && std::rename(tmp.c_str(), path.c_str()) == 0;
+}
+
+std::string read_whole(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+const char* verdict_name(Verdict v) {
+  switch (v) {
+    case Verdict::kClear: return "CLEAR";
+    case Verdict::kTouching: return "TOUCHING";
+    case Verdict::kCollision: return "COLLISION";
+    case Verdict::kInconclusive: return "INCONCLUSIVE";
+  }
+  return "?";
+}
+
+nlohmann::json vec(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
+int fail(int rank, const std::string& message) {
+  std::fprintf(stderr, "gatekeeper-audit (process %d): %s\n", rank, message.c_str());
+  MPI_Abort(MPI_COMM_WORLD, 2);
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  MPI_Init(&argc, &argv);
+  int rank = 0, size = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+
+  CLI::App app("gatekeeper-audit: one scene's audit over the processes of an MPI job");
+  std::string data_dir, scene_id, work_dir, out_path;
+  engine::AuditOptions asked;
+  int threads = 1;
+  app.add_option("--data-dir", data_dir, "the daemon's data directory (read only)")->required();
+  app.add_option("--scene", scene_id, "the scene to audit")->required();
+  app.add_option("--work-dir", work_dir, "a directory every process can write: finished tiles (the checkpoint)")->required();
+  app.add_option("--out", out_path, "the report (JSON), written by process 0")->required();
+  app.add_option("--clearance-mm", asked.clearance_mm, "pairs closer than this are clearance violations");
+  app.add_option("--tile-mm", asked.tile_mm, "floor-plan tile side (0: 50,000 mm)");
+  app.add_option("--threads", threads, "threads per process");
+  app.add_flag("--compute-depth", asked.compute_depth, "a penetration depth per colliding pair");
+  app.add_flag("--compute-volume", asked.compute_volume, "the shared volume per colliding pair of closed meshes");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (rank == 0) app.exit(e);
+    MPI_Finalize();
+    return e.get_exit_code() == 0 ? 0 : 2;
+  }
+  asked.threads = threads;
+  auto options = engine::checked_audit_options(asked, 1);
+  if (!options.ok()) return fail(rank, options.error().to_string());
+  std::error_code ec;
+  fs::create_directories(work_dir, ec);
+  // For whoever watches the job (a test kills one process by it).
+  std::ofstream(work_dir + "/process-" + std::to_string(rank) + ".pid") << ::getpid() << "\n";
+
+  auto scenes = engine::SceneStore::open(data_dir);
+  if (!scenes.ok()) return fail(rank, scenes.error().to_string());
+  auto scene = scenes.value()->get(scene_id);
+  if (!scene.ok()) return fail(rank, scene.error().to_string());
+  auto store = engine::PartStore::open_read_only(data_dir);
+  if (!store.ok()) return fail(rank, store.error().to_string());
+  engine::PartRegistry parts(*store.value(), data_dir + "/bvh-cache");
+  const auto t_load = std::chrono::steady_clock::now();
+  auto placed = engine::place_scene(scene.value(), parts);
+  if (!placed.ok()) return fail(rank, placed.error().to_string());
+  const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_load).count();
+  const std::vector<engine::AuditObject>& objects = placed.value().objects;
+
+  // The same plan on every process.
+  engine::AuditOptions plan_options = options.value();
+  plan_options.broad_phase_only = true;
+  auto planned = engine::audit_scene(objects, plan_options);
+  if (!planned.ok()) return fail(rank, planned.error().to_string());
+  const std::vector<double>& costs = planned.value().tile_costs;
+  const std::vector<std::vector<std::size_t>> plan = engine::plan_tiles(costs, size);
+  std::vector<char> mine(costs.size(), 0);
+  for (std::size_t t : plan[static_cast<std::size_t>(rank)]) mine[t] = 1;
+
+  engine::AuditOptions run = options.value();
+  std::size_t resumed = 0;
+  for (std::size_t t = 0; t < costs.size(); ++t) {
+    const bool done = fs::exists(tile_path(work_dir, t));
+    if (!mine[t] || done) run.skip_tiles.push_back(t);
+    if (mine[t] && done) ++resumed;
+  }
+  std::string write_error;
+  std::size_t written = 0;
+  run.on_tile_done = [&](std::size_t tile, const std::vector<engine::PairClash>& clashes) {
+    if (!write_whole(tile_path(work_dir, tile), server::encode_tile(clashes))) write_error = "cannot write " + tile_path(work_dir, tile);
+    else ++written;
+  };
+  const auto t_run = std::chrono::steady_clock::now();
+  auto result = engine::audit_scene(objects, run);
+  if (!result.ok()) return fail(rank, result.error().to_string());
+  if (!write_error.empty()) return fail(rank, write_error);
+  const double run_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_run).count();
+  double my_cost = 0.0;
+  for (std::size_t t : plan[static_cast<std::size_t>(rank)]) my_cost += costs[t];
+  std::ofstream(work_dir + "/process-" + std::to_string(rank) + ".json")
+      << nlohmann::json{{"process", rank}, {"tiles", plan[static_cast<std::size_t>(rank)].size()}, {"tiles_computed", written},
+                        {"tiles_resumed", resumed}, {"estimated_cost", my_cost}, {"load_s", load_s}, {"audit_s", run_s}}
+             .dump()
+      << "\n";
+
+  MPI_Barrier(MPI_COMM_WORLD);
+  if (rank == 0) {
+    std::vector<engine::PairClash> clashes;
+    std::vector<std::size_t> missing;
+    for (std::size_t t = 0; t < costs.size(); ++t) {
+      if (!(costs[t] > 0.0)) continue;
+      if (!fs::exists(tile_path(work_dir, t))) {
+        missing.push_back(t);
+        continue;
+      }
+      auto tile = server::decode_tile(read_whole(tile_path(work_dir, t)));
+      if (!tile.ok()) return fail(rank, "tile " + std::to_string(t) + ": " + tile.error().message + " (delete its file and run again)");
+      clashes.insert(clashes.end(), tile.value().begin(), tile.value().end());
+    }
+    if (!missing.empty()) return fail(rank, std::to_string(missing.size()) + " tiles have no result: run the same command again");
+    std::sort(clashes.begin(), clashes.end(),
+              [](const engine::PairClash& l, const engine::PairClash& r) { return std::tie(l.a, l.b) < std::tie(r.a, r.b); });
+    const auto& records = placed.value().records;
+    nlohmann::json report;
+    report["scene_id"] = scene_id;
+    report["processes"] = size;
+    report["objects"] = planned.value().objects;
+    report["triangles"] = planned.value().triangles;
+    report["tiles"] = planned.value().tiles;
+    report["candidate_pairs"] = planned.value().candidate_pairs;
+    report["excluded_by_rules"] = planned.value().excluded_by_rules;
+    nlohmann::json list = nlohmann::json::array();
+    for (const engine::PairClash& c : clashes) {
+      nlohmann::json j{{"object_a", records[c.a]->id},
+                       {"object_b", records[c.b]->id},
+                       {"name_a", records[c.a]->name},
+                       {"name_b", records[c.b]->name},
+                       {"verdict", verdict_name(c.verdict)},
+                       {"distance_mm", c.distance_mm},
+                       {"clearance_violation", c.clearance_violation},
+                       {"point_a", vec(c.point_a)},
+                       {"point_b", vec(c.point_b)},
+                       {"contacts", c.contacts},
+                       {"regions", c.regions.size()},
+                       {"depth_mm", c.depth_mm},
+                       {"volume_mm3", c.volume_mm3},
+                       {"volume_error_bound_mm3", c.volume_error_bound_mm3}};
+      if (c.depth_direction) j["depth_direction"] = vec(c.depth_direction->vector());
+      if (!c.error.empty()) j["error"] = c.error;
+      list.push_back(std::move(j));
+    }
+    report["clashes"] = std::move(list);
+    nlohmann::json per_process = nlohmann::json::array();
+    for (int r = 0; r < size; ++r) {
+      const std::string text = read_whole(work_dir + "/process-" + std::to_string(r) + ".json");
+      per_process.push_back(nlohmann::json::parse(text, nullptr, false));
+    }
+    report["per_process"] = std::move(per_process);
+    if (!write_whole(out_path, report.dump(1) + "\n")) return fail(rank, "cannot write " + out_path);
+    std::printf("gatekeeper-audit: %zu clashes among %llu objects, %zu tiles over %d processes -> %s\n", clashes.size(),
+                static_cast<unsigned long long>(planned.value().objects), planned.value().tiles, size, out_path.c_str());
+  }
+  MPI_Finalize();
+  return 0;
+}
