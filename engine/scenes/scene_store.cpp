@@ -36,16 +36,30 @@ Result<std::unique_ptr<SceneStore>> SceneStore::open(const std::string& director
   }
   // Objects gained a group after the first release: databases written before get the column.
   sqlite3_exec(store->db_, "ALTER TABLE scene_objects ADD COLUMN grp TEXT NOT NULL DEFAULT ''", nullptr, nullptr, nullptr);
+  store->load();
+  return store;
+}
+
+Result<std::unique_ptr<SceneStore>> SceneStore::open_read_only(const std::string& directory) {
+  std::unique_ptr<SceneStore> store(new SceneStore());
+  if (sqlite3_open_v2((directory + "/gatekeeper.sqlite").c_str(), &store->db_, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK)
+    return storage_error("cannot open the scene database in " + directory + " for reading");
+  sqlite3_busy_timeout(store->db_, 5000);
+  store->load();
+  return store;
+}
+
+void SceneStore::load() {
   sqlite3_stmt* stmt = nullptr;
-  sqlite3_prepare_v2(store->db_, "SELECT id, name FROM scenes", -1, &stmt, nullptr);
+  sqlite3_prepare_v2(db_, "SELECT id, name FROM scenes", -1, &stmt, nullptr);
   while (sqlite3_step(stmt) == SQLITE_ROW) {
     SceneRecord s;
     s.id = reinterpret_cast<const char*>(sqlite3_column_text(stmt, 0));
     s.name = reinterpret_cast<const char*>(sqlite3_column_text(stmt, 1));
-    store->scenes_[s.id] = s;
+    scenes_[s.id] = s;
   }
   sqlite3_finalize(stmt);
-  sqlite3_prepare_v2(store->db_, "SELECT scene_id, id, name, category, part_id, tx, ty, tz, ax, ay, az, angle, grp FROM scene_objects",
+  sqlite3_prepare_v2(db_, "SELECT scene_id, id, name, category, part_id, tx, ty, tz, ax, ay, az, angle, grp FROM scene_objects",
                      -1, &stmt, nullptr);
   while (sqlite3_step(stmt) == SQLITE_ROW) {
     SceneObjectRecord o;
@@ -60,10 +74,9 @@ Result<std::unique_ptr<SceneStore>> SceneStore::open(const std::string& director
     }
     o.pose.angle_deg = sqlite3_column_double(stmt, 11);
     o.group = reinterpret_cast<const char*>(sqlite3_column_text(stmt, 12));
-    store->scenes_[scene].objects[o.id] = o;
+    scenes_[scene].objects[o.id] = o;
   }
   sqlite3_finalize(stmt);
-  return store;
 }
 
 SceneStore::~SceneStore() {

@@ -39,6 +39,9 @@ struct SceneRecord {
 class SceneStore {
  public:
   static Result<std::unique_ptr<SceneStore>> open(const std::string& directory);
+  // For a batch program reading a daemon's data directory beside it (the MPI audit driver, whose
+  // processes open it at once): reads only, writes nothing, not even the schema.
+  static Result<std::unique_ptr<SceneStore>> open_read_only(const std::string& directory);
   ~SceneStore();
 
   Result<SceneRecord> create(const std::string& name);
@@ -62,6 +65,7 @@ class SceneStore {
 
  private:
   SceneStore() = default;
+  void load();  // every scene and object from the database into memory
   Result<bool> write_object(const std::string& scene_id, const SceneObjectRecord& o);
   Result<bool> delete_object(const std::string& scene_id, const std::string& object_id);  // mutex_ held
   std::string new_id(const char* prefix);

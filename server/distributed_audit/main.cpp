@@ -19,6 +19,7 @@
 #include "engine/parts/part_store.h"
 #include "engine/scenes/placed_scene.h"
 #include "engine/scenes/scene_store.h"
+#include "kernel/core/content_hash.h"
 #include "server/audit_checkpoint_store.h"
 
 #include <CLI/CLI.hpp>
@@ -81,6 +82,38 @@ const char* verdict_name(Verdict v) {
 
 nlohmann::json vec(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
+// What the tiles in a work directory were computed from: the scene's snapshot (every object's id,
+// part, pose, category and group) and the options that shape answers or tiles. A work directory
+// holding another audit's tiles is refused, never merged.
+std::string fingerprint(const engine::SceneRecord& scene, const engine::AuditOptions& o) {
+  ContentHash h;
+  auto text = [&](const std::string& t) {
+    h.add(static_cast<std::uint64_t>(t.size()));
+    h.add_bytes(t.data(), t.size());
+  };
+  text(scene.id);
+  for (const auto& [id, object] : scene.objects) {
+    text(id);
+    text(object.part_id);
+    text(object.category);
+    text(object.group);
+    const engine::StoredPose& p = object.pose;
+    h.add({p.translation.x(), p.translation.y(), p.translation.z(), p.axis.x(), p.axis.y(), p.axis.z(), p.angle_deg});
+  }
+  h.add({o.clearance_mm, o.tile_mm, o.region_merge_mm, o.compute_depth ? 1.0 : 0.0, o.compute_volume ? 1.0 : 0.0});
+  h.add(static_cast<std::uint64_t>(o.max_contacts_per_pair));
+  for (const engine::ContactRule& r : o.rules) {
+    text(r.name);
+    text(r.category_a);
+    text(r.category_b);
+    h.add(static_cast<std::uint64_t>(r.same_group_only));
+  }
+  const Hash128 v = h.value();
+  char hex[33];
+  std::snprintf(hex, sizeof hex, "%016llx%016llx", static_cast<unsigned long long>(v.high), static_cast<unsigned long long>(v.low));
+  return hex;
+}
+
 int fail(int rank, const std::string& message) {
   std::fprintf(stderr, "gatekeeper-audit (process %d): %s\n", rank, message.c_str());
   MPI_Abort(MPI_COMM_WORLD, 2);
@@ -118,15 +151,24 @@ int main(int argc, char** argv) {
   asked.threads = threads;
   auto options = engine::checked_audit_options(asked, 1);
   if (!options.ok()) return fail(rank, options.error().to_string());
-  std::error_code ec;
-  fs::create_directories(work_dir, ec);
-  // For whoever watches the job (a test kills one process by it).
-  std::ofstream(work_dir + "/process-" + std::to_string(rank) + ".pid") << ::getpid() << "\n";
-
-  auto scenes = engine::SceneStore::open(data_dir);
+  if (!fs::is_regular_file(data_dir + "/gatekeeper.sqlite")) return fail(rank, "--data-dir: no daemon data directory at " + data_dir);
+  auto scenes = engine::SceneStore::open_read_only(data_dir);
   if (!scenes.ok()) return fail(rank, scenes.error().to_string());
   auto scene = scenes.value()->get(scene_id);
   if (!scene.ok()) return fail(rank, scene.error().to_string());
+
+  // The work directory belongs to this audit: its fingerprint is written by the first run (each
+  // process writes the same bytes, renamed into place) and must match on every later one.
+  std::error_code ec;
+  fs::create_directories(work_dir, ec);
+  if (ec) return fail(rank, "--work-dir: cannot create " + work_dir + ": " + ec.message());
+  const std::string print = fingerprint(scene.value(), options.value());
+  const std::string print_path = work_dir + "/audit.fingerprint";
+  if (!fs::exists(print_path) && !write_whole(print_path, print + "\n")) return fail(rank, "--work-dir: cannot write " + print_path);
+  if (read_whole(print_path) != print + "\n")
+    return fail(rank, "--work-dir: " + work_dir + " holds the tiles of another audit (another scene snapshot or other options); use a fresh directory");
+  // For whoever watches the job (a test kills one process by it).
+  std::ofstream(work_dir + "/process-" + std::to_string(rank) + ".pid") << ::getpid() << "\n";
   auto store = engine::PartStore::open_read_only(data_dir);
   if (!store.ok()) return fail(rank, store.error().to_string());
   engine::PartRegistry parts(*store.value(), data_dir + "/bvh-cache");

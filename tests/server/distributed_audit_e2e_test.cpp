@@ -137,6 +137,15 @@ TEST(DistributedAuditE2E, OneTwoAndFourProcessesEqualTheDaemonsAudit) {
     }
     EXPECT_GT(computed, 4u);
   }
+  // The 1-process work directory belongs to that audit: another clearance there is refused.
+  const std::string work = dir + "/work-1";
+  EXPECT_NE(shell(mpiexec(1, dir, scene, work, dir + "/other.json", "--clearance-mm 25 --tile-mm 2500")), 0);
+  EXPECT_NE(testing::read_file(work + ".log").find("--work-dir"), std::string::npos) << testing::read_file(work + ".log");
+  EXPECT_FALSE(fs::exists(dir + "/other.json"));
+  // And a directory that is no daemon's data directory is refused without creating anything there.
+  const std::string nowhere = dir + "/no-such-data";
+  EXPECT_NE(shell(mpiexec(1, nowhere, scene, dir + "/work-x", dir + "/x.json", "")), 0);
+  EXPECT_FALSE(fs::exists(nowhere));
 }
 
 TEST(DistributedAuditE2E, AKilledProcessEndsTheJobAndTheSameCommandRedoesOnlyItsMissingTiles) {
