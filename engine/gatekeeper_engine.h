@@ -80,6 +80,8 @@ class Engine {
   Result<std::string> start_audit(const std::string& scene_id, const AuditOptions& asked, const std::string& baseline_job_id = "");
   Result<std::shared_ptr<AuditJob>> audit(const std::string& job_id) { return audits_.get(job_id); }
   AuditJobs& audits() { return audits_; }
+  // A client's cancel (kept across a restart).
+  Result<std::shared_ptr<AuditJob>> cancel_audit(const std::string& job_id) { return audits_.cancel(job_id); }
   // Queues the audits a stopped or killed daemon left unfinished; returns how many.
   std::size_t resume_audits() { return audits_.resume_unfinished(); }
 

@@ -37,6 +37,9 @@ PACKAGES=(
   libtomlplusplus-dev
   # gatekeeper-audit: one scene's audit over the processes of an MPI job (mpiexec from openmpi-bin)
   libopenmpi-dev openmpi-bin
+  # installed with libopenmpi-dev (recommended); named so that the shared multiarch include
+  # directory it also owns is accounted for by the install-list check
+  libcoarrays-dev
   # python clients: grpcio/protobuf at run time; pip, setuptools and wheel install clients/python offline
   python3 python3-grpcio python3-protobuf python3-pip python3-setuptools python3-wheel python3-venv
   # the audit report page: three.js from npm, checked in headless Chromium

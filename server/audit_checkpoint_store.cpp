@@ -36,8 +36,12 @@ Result<bool> execute(sqlite3* db, const char* sql, const std::vector<std::string
 
 }  // namespace
 
+constexpr std::uint32_t kTileMagic = 0x474b5431;
+
 std::string encode_tile(const std::vector<PairClash>& clashes) {
   spb::CheckpointTile tile;
+  tile.set_magic(kTileMagic);
+  tile.set_clash_count(static_cast<std::uint32_t>(clashes.size()));
   for (const PairClash& c : clashes) {
     spb::CheckpointClash* o = tile.add_clashes();
     o->set_a(c.a);
@@ -63,12 +67,14 @@ std::string encode_tile(const std::vector<PairClash>& clashes) {
 
 Result<std::vector<PairClash>> decode_tile(const std::string& bytes) {
   spb::CheckpointTile tile;
-  if (!tile.ParseFromString(bytes)) return Error{ErrorCode::kInternal, "checkpoint", "a tile's record cannot be read"};
+  if (!tile.ParseFromString(bytes) || tile.magic() != kTileMagic || tile.clash_count() != static_cast<std::uint32_t>(tile.clashes_size()))
+    return Error{ErrorCode::kInternal, "checkpoint", "a tile's record cannot be read (damaged or cut short)"};
   std::vector<PairClash> out;
   for (const spb::CheckpointClash& o : tile.clashes()) {
     PairClash c;
     c.a = o.a();
     c.b = o.b();
+    if (!(c.a < c.b)) return Error{ErrorCode::kInternal, "checkpoint", "a tile's clash names its objects out of order"};
     if (o.verdict() < 0 || o.verdict() > static_cast<int>(Verdict::kInconclusive))
       return Error{ErrorCode::kInternal, "checkpoint", "a tile's clash has an unknown verdict"};
     if (o.inconclusive_reason() < 0 || o.inconclusive_reason() > static_cast<int>(InconclusiveReason::kPairFailed))
@@ -112,10 +118,12 @@ Result<std::unique_ptr<AuditCheckpointStore>> AuditCheckpointStore::open(const s
   // synchronous=FULL: a tile counts as kept only once it is on disk.
   const char* schema =
       "PRAGMA journal_mode=WAL; PRAGMA synchronous=FULL; PRAGMA busy_timeout=5000;"
-      "CREATE TABLE IF NOT EXISTS running_audits (id TEXT PRIMARY KEY, begun INTEGER, data BLOB);"
+      "CREATE TABLE IF NOT EXISTS running_audits (id TEXT PRIMARY KEY, begun INTEGER, data BLOB, cancelled INTEGER DEFAULT 0);"
       "CREATE TABLE IF NOT EXISTS audit_tiles (job_id TEXT, tile INTEGER, data BLOB, PRIMARY KEY (job_id, tile));";
   if (sqlite3_exec(store->db_, schema, nullptr, nullptr, nullptr) != SQLITE_OK)
     return Error{ErrorCode::kInternal, "data_dir", "cannot prepare the checkpoint tables"};
+  // Tables written before cancels were kept get the column (an error when it is there already).
+  sqlite3_exec(store->db_, "ALTER TABLE running_audits ADD COLUMN cancelled INTEGER DEFAULT 0", nullptr, nullptr, nullptr);
   return store;
 }
 
@@ -156,6 +164,10 @@ Result<bool> AuditCheckpointStore::tile_done(const std::string& job_id, std::siz
   return execute(db_, "INSERT OR REPLACE INTO audit_tiles (job_id, tile, data) VALUES (?, ?, ?)", {job_id}, &bytes, &number);
 }
 
+Result<bool> AuditCheckpointStore::cancelled(const std::string& job_id) {
+  return execute(db_, "UPDATE running_audits SET cancelled = 1 WHERE id = ?", {job_id});
+}
+
 Result<bool> AuditCheckpointStore::forget(const std::string& job_id) {
   if (sqlite3_exec(db_, "BEGIN", nullptr, nullptr, nullptr) != SQLITE_OK) return storage_error("cannot begin", db_);
   auto tiles = execute(db_, "DELETE FROM audit_tiles WHERE job_id = ?", {job_id});
@@ -171,23 +183,27 @@ Result<bool> AuditCheckpointStore::forget(const std::string& job_id) {
 Result<std::vector<engine::UnfinishedAudit>> AuditCheckpointStore::unfinished() const {
   std::vector<engine::UnfinishedAudit> out;
   sqlite3_stmt* stmt = nullptr;
-  if (sqlite3_prepare_v2(db_, "SELECT id, data FROM running_audits ORDER BY begun, id", -1, &stmt, nullptr) != SQLITE_OK)
+  if (sqlite3_prepare_v2(db_, "SELECT id, data, cancelled FROM running_audits ORDER BY begun, id", -1, &stmt, nullptr) != SQLITE_OK)
     return storage_error("cannot read", db_);
   while (sqlite3_step(stmt) == SQLITE_ROW) {
+    const unsigned char* id_text = sqlite3_column_text(stmt, 0);
+    if (!id_text) continue;  // no job can own it
+    engine::UnfinishedAudit u;
+    u.job_id = reinterpret_cast<const char*>(id_text);
+    u.cancelled = sqlite3_column_int(stmt, 2) != 0;
     spb::RunningAudit r;
     const void* blob = sqlite3_column_blob(stmt, 1);
-    const std::string id = reinterpret_cast<const char*>(sqlite3_column_text(stmt, 0));
     if (!blob || !r.ParseFromArray(blob, sqlite3_column_bytes(stmt, 1))) {
-      sqlite3_finalize(stmt);
-      return Error{ErrorCode::kInternal, "checkpoint", "the running audit '" + id + "' cannot be read"};
+      u.unreadable = "its checkpoint record is damaged";
+      out.push_back(std::move(u));
+      continue;
     }
     auto scene = scene_from_proto(r.scene());
     if (!scene.ok()) {
-      sqlite3_finalize(stmt);
-      return Error{ErrorCode::kInternal, "checkpoint", "the running audit '" + id + "' has a scene that cannot be read"};
+      u.unreadable = "its checkpoint's scene cannot be read: " + scene.error().message;
+      out.push_back(std::move(u));
+      continue;
     }
-    engine::UnfinishedAudit u;
-    u.job_id = r.job_id();
     u.scene = std::move(scene).value();
     u.options.clearance_mm = r.clearance_mm();
     u.options.tile_mm = r.tile_mm();
@@ -204,19 +220,17 @@ Result<std::vector<engine::UnfinishedAudit>> AuditCheckpointStore::unfinished() 
   }
   sqlite3_finalize(stmt);
   for (engine::UnfinishedAudit& u : out) {
+    if (!u.unreadable.empty()) continue;
     if (sqlite3_prepare_v2(db_, "SELECT tile, data FROM audit_tiles WHERE job_id = ? ORDER BY tile", -1, &stmt, nullptr) != SQLITE_OK)
       return storage_error("cannot read", db_);
     sqlite3_bind_text(stmt, 1, u.job_id.c_str(), -1, SQLITE_TRANSIENT);
     while (sqlite3_step(stmt) == SQLITE_ROW) {
-      const auto tile = static_cast<std::size_t>(sqlite3_column_int64(stmt, 0));
+      const sqlite3_int64 tile = sqlite3_column_int64(stmt, 0);
       const void* blob = sqlite3_column_blob(stmt, 1);
       const std::string bytes = blob ? std::string(static_cast<const char*>(blob), static_cast<std::size_t>(sqlite3_column_bytes(stmt, 1))) : "";
       auto clashes = decode_tile(bytes);
-      if (!clashes.ok()) {
-        sqlite3_finalize(stmt);
-        return Error{ErrorCode::kInternal, "checkpoint", "audit '" + u.job_id + "', tile " + std::to_string(tile) + ": " + clashes.error().message};
-      }
-      u.tiles[tile] = std::move(clashes).value();
+      if (tile < 0 || !clashes.ok()) continue;  // damaged: the tile is computed again
+      u.tiles[static_cast<std::size_t>(tile)] = std::move(clashes).value();
     }
     sqlite3_finalize(stmt);
   }

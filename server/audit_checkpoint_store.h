@@ -23,7 +23,10 @@ class AuditCheckpointStore final : public engine::AuditCheckpoints {
   Result<bool> begin(const std::string& job_id, const SceneRecord& scene, const AuditOptions& options,
                      const std::string& baseline_job_id) override;
   Result<bool> tile_done(const std::string& job_id, std::size_t tile, const std::vector<PairClash>& clashes) override;
+  Result<bool> cancelled(const std::string& job_id) override;
   Result<bool> forget(const std::string& job_id) override;
+  // Tolerant of damage: a job whose record cannot be read comes back `unreadable` (it ends FAILED),
+  // a tile that cannot be read is left out (computed again), a row without an id is skipped.
   Result<std::vector<engine::UnfinishedAudit>> unfinished() const override;
 
  private:

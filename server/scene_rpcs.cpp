@@ -276,9 +276,8 @@ grpc::ServerUnaryReactor* GatekeeperService::CancelAudit(grpc::CallbackServerCon
                                                          pb::AuditProgress* response) {
   return unary(ctx, stats_, "CancelAudit", [&]() -> grpc::Status {
     if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
-    auto job = engine_.audit(request->job_id());
+    auto job = engine_.cancel_audit(request->job_id());
     if (!job.ok()) return grpc::Status(to_status(job.error()));
-    job.value()->cancel();
     progress_to_proto(request->job_id(), job.value()->snapshot(), response);
     return grpc::Status(grpc::Status::OK);
   });

@@ -20,6 +20,10 @@ struct UnfinishedAudit {
   AuditOptions options;     // the answer options, tiles and threads (no callbacks)
   std::string baseline_job_id;  // a re-audit's baseline (finished, archived), or empty
   std::map<std::size_t, std::vector<PairClash>> tiles;  // finished tiles and their clashes
+  bool cancelled = false;   // a client cancelled it before the daemon stopped: it ends CANCELLED
+  // Its record could not be read (damaged): it ends FAILED with this message. Tiles that cannot be
+  // read are simply left out (computed again).
+  std::string unreadable;
 };
 
 class AuditCheckpoints {
@@ -31,6 +35,8 @@ class AuditCheckpoints {
   // One tile of the job is finished, with these clashes (kernel answers; object indices are the
   // snapshot's objects in id order).
   virtual Result<bool> tile_done(const std::string& job_id, std::size_t tile, const std::vector<PairClash>& clashes) = 0;
+  // A client cancelled the job: after a stop it ends CANCELLED instead of resuming.
+  virtual Result<bool> cancelled(const std::string& job_id) = 0;
   // The job ended and is archived: its checkpoint goes.
   virtual Result<bool> forget(const std::string& job_id) = 0;
   // Every job begun and not forgotten, oldest first.

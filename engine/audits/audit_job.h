@@ -74,8 +74,8 @@ class AuditJob {
   // The daemon is stopping: the job ends like a cancelled one, but is marked interrupted, so that
   // its checkpoint is kept and it resumes when the daemon starts again.
   void interrupt() {
+    if (cancelled_.exchange(true)) return;  // cancelled by a client before: it stays cancelled
     interrupted_ = true;
-    cancelled_ = true;
   }
   bool interrupted() const { return interrupted_; }
   const AuditOptions& options() const { return options_; }

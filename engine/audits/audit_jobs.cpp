@@ -99,23 +99,43 @@ std::size_t AuditJobs::resume_unfinished() {
   }
   std::size_t queued = 0;
   for (UnfinishedAudit& u : unfinished.value()) {
+    if (!u.unreadable.empty()) {
+      // Nothing to run: it ends FAILED, archived, and its checkpoint goes.
+      AuditSnapshot failed;
+      failed.status = AuditStatus::kFailed;
+      failed.message = "the audit could not be resumed after a restart: " + u.unreadable;
+      auto job = AuditJob::restored(u.scene, failed, {}, {});
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        jobs_[u.job_id] = job;
+      }
+      if (archive_ && archive_->save(u.job_id, *job, failed).ok()) {
+        archived(u.job_id);
+        (void)checkpoints_->forget(u.job_id);
+      }
+      spdlog::warn("audit {} not resumed: {}", u.job_id, u.unreadable);
+      continue;
+    }
+    // The baseline must have ended DONE; one that is itself being resumed (its archive write had
+    // failed) is not a baseline yet.
     std::shared_ptr<const AuditJob> baseline;
     if (!u.baseline_job_id.empty()) {
       auto base = get(u.baseline_job_id);
-      if (base.ok()) baseline = base.value();
+      if (base.ok() && base.value()->snapshot().status == AuditStatus::kDone) baseline = base.value();
     }
     auto job = std::make_shared<AuditJob>(u.scene, u.options, baseline);
     const std::size_t finished = u.tiles.size();
-    // A re-audit whose baseline cannot be read any more is done as a full audit (whose answer a
-    // re-audit equals), from scratch: its tiles were the re-audit's.
+    // A re-audit whose baseline cannot be used is done as a full audit (whose answer a re-audit
+    // equals), from scratch: its tiles were the re-audit's.
     if (u.baseline_job_id.empty() || baseline) job->resume_from(std::move(u.tiles));
+    if (u.cancelled) job->cancel();  // ends CANCELLED at once, with the finished tiles' clashes
     {
       std::lock_guard<std::mutex> lock(mutex_);
       jobs_[u.job_id] = job;
     }
     if (submit(u.job_id, job)) {
       ++queued;
-      spdlog::info("audit {} resumed from {} finished tiles", u.job_id, finished);
+      spdlog::info("audit {} resumed from {} finished tiles{}", u.job_id, finished, u.cancelled ? " (cancelled: it ends so)" : "");
     } else {
       remove(u.job_id);
       spdlog::warn("audit {} not resumed: the audit queue is full; its checkpoint stays for the next start", u.job_id);
@@ -149,6 +169,17 @@ std::size_t AuditJobs::running() const {
   std::size_t n = 0;
   for (const auto& [id, job] : jobs_) n += job->running() ? 1 : 0;
   return n;
+}
+
+Result<std::shared_ptr<AuditJob>> AuditJobs::cancel(const std::string& id) {
+  auto job = get(id);
+  if (!job.ok()) return job;
+  if (checkpoints_ && job.value()->running()) {
+    auto kept = checkpoints_->cancelled(id);
+    if (!kept.ok()) spdlog::warn("audit {}: the cancel is not kept for a restart: {}", id, kept.error().to_string());
+  }
+  job.value()->cancel();
+  return job;
 }
 
 void AuditJobs::cancel_all() {

@@ -41,6 +41,9 @@ class AuditJobs {
   // The job ended and is safely archived: from now on it may be dropped from memory.
   void archived(const std::string& id);
   void remove(const std::string& id);
+  // A client cancels a job: it ends CANCELLED with the pairs it finished, also if the daemon stops
+  // before it has ended (the checkpoint remembers the cancel).
+  Result<std::shared_ptr<AuditJob>> cancel(const std::string& id);
   // Every job still running stops: each ends CANCELLED with the pairs it finished, archived like
   // any ended job.
   void cancel_all();

@@ -44,6 +44,12 @@ using namespace gk;
 
 std::string tile_path(const std::string& work_dir, std::size_t tile) { return work_dir + "/tile-" + std::to_string(tile) + ".bin"; }
 
+// A tile file: a header naming the audit (its fingerprint), the tile and the length of the
+// clashes' bytes that follow, so a file of another audit, tile or a cut one is never read as this.
+std::string tile_header(const std::string& print, std::size_t tile, std::size_t bytes) {
+  return "GKTILE1 " + print + " " + std::to_string(tile) + " " + std::to_string(bytes) + "\n";
+}
+
 // Whole, synced, then renamed: a reader never sees half a tile.
 bool write_whole(const std::string& path, const std::string& bytes) {
   const std::string tmp = path + ".tmp." + std::to_string(::getpid());
@@ -198,7 +204,9 @@ int main(int argc, char** argv) {
   std::string write_error;
   std::size_t written = 0;
   run.on_tile_done = [&](std::size_t tile, const std::vector<engine::PairClash>& clashes) {
-    if (!write_whole(tile_path(work_dir, tile), server::encode_tile(clashes))) write_error = "cannot write " + tile_path(work_dir, tile);
+    const std::string bytes = server::encode_tile(clashes);
+    if (!write_whole(tile_path(work_dir, tile), tile_header(print, tile, bytes.size()) + bytes))
+      write_error = "cannot write " + tile_path(work_dir, tile);
     else ++written;
   };
   const auto t_run = std::chrono::steady_clock::now();
@@ -224,8 +232,14 @@ int main(int argc, char** argv) {
         missing.push_back(t);
         continue;
       }
-      auto tile = server::decode_tile(read_whole(tile_path(work_dir, t)));
-      if (!tile.ok()) return fail(rank, "tile " + std::to_string(t) + ": " + tile.error().message + " (delete its file and run again)");
+      const std::string text = read_whole(tile_path(work_dir, t));
+      const std::size_t eol = text.find('\n');
+      const std::string bytes = eol == std::string::npos ? "" : text.substr(eol + 1);
+      const bool headed = eol != std::string::npos && text.substr(0, eol + 1) == tile_header(print, t, bytes.size());
+      auto tile = headed ? server::decode_tile(bytes) : Result<std::vector<engine::PairClash>>(Error{ErrorCode::kInternal, "tile", "not this audit's tile, or cut short"});
+      if (!tile.ok()) return fail(rank, tile_path(work_dir, t) + ": " + tile.error().message + " (delete the file and run again)");
+      for (const engine::PairClash& c : tile.value())
+        if (c.b >= objects.size()) return fail(rank, tile_path(work_dir, t) + ": names an object this scene does not have (delete the file and run again)");
       clashes.insert(clashes.end(), tile.value().begin(), tile.value().end());
     }
     if (!missing.empty()) return fail(rank, std::to_string(missing.size()) + " tiles have no result: run the same command again");

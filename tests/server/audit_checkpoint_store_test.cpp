@@ -1,7 +1,8 @@
 // The checkpoint store of running audits: a tile's clashes come back bit for bit (every field,
-// empty boxes and unit directions included), jobs come back with their snapshot and options in
-// the order they began, forget() removes a job and its tiles, and a damaged row is an error
-// naming the job and tile, never a wrong clash.
+// empty boxes and unit directions included), an empty or cut tile record is refused, jobs come
+// back with their snapshot, options and cancel in the order they began, forget() removes a job
+// and its tiles, and damage never costs other jobs: a damaged tile is left out (computed again),
+// a damaged job record comes back unreadable (it ends FAILED), a row without an id is skipped.
 #include "server/audit_checkpoint_store.h"
 
 #include "tests/server/daemon_fixture.h"
@@ -100,6 +101,12 @@ TEST(AuditCheckpointStore, ATilesClashesComeBackBitForBit) {
     for (std::size_t i = 0; i < clashes.size(); ++i) expect_identical(clashes[i], back.value()[i]);
   }
   EXPECT_FALSE(decode_tile("\xff\xff\xff not a tile").ok());
+  EXPECT_FALSE(decode_tile("").ok());  // an empty tile is not zero bytes
+  const std::string some = encode_tile(random_clashes(rng, 5));
+  for (std::size_t cut = 0; cut < some.size(); cut += 7) {
+    auto cut_short = decode_tile(some.substr(0, cut));
+    EXPECT_TRUE(!cut_short.ok() || cut_short.value().size() == 5) << "cut at " << cut;
+  }
 }
 
 TEST(AuditCheckpointStore, JobsComeBackWithTheirSnapshotOptionsAndTilesUntilForgotten) {
@@ -154,19 +161,34 @@ TEST(AuditCheckpointStore, JobsComeBackWithTheirSnapshotOptionsAndTilesUntilForg
   for (std::size_t i = 0; i < tile3.size(); ++i) expect_identical(tile3[i], first.tiles.at(3)[i]);
   EXPECT_TRUE(first.tiles.at(4).empty());
   EXPECT_EQ(unfinished.value()[1].baseline_job_id, "audit-0");
+  EXPECT_FALSE(first.cancelled);
+  ASSERT_TRUE(store->cancelled("audit-2").ok());
   ASSERT_TRUE(store->forget("audit-1").ok());
   ASSERT_EQ(store->unfinished().value().size(), 1u);
+  EXPECT_TRUE(store->unfinished().value()[0].cancelled);
 
-  // A damaged tile row: an error naming the job and tile.
+  // Damage: a tile of audit-2 cut to nothing, a third job's record garbage, a row without an id.
   ASSERT_TRUE(store->tile_done("audit-2", 5, tile3).ok());
+  ASSERT_TRUE(store->tile_done("audit-2", 6, tile9).ok());
+  ASSERT_TRUE(store->begin("audit-3", scene, options, "").ok());
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open((dir + "/gatekeeper.sqlite").c_str(), &db), SQLITE_OK);
-  ASSERT_EQ(sqlite3_exec(db, "UPDATE audit_tiles SET data = x'0a05ffffffffff' WHERE job_id = 'audit-2'", nullptr, nullptr, nullptr), SQLITE_OK);
+  for (const char* damage : {"UPDATE audit_tiles SET data = x'' WHERE job_id = 'audit-2' AND tile = 5",
+                             "UPDATE running_audits SET data = x'ffffffff' WHERE id = 'audit-3'",
+                             "INSERT INTO running_audits (id, begun, data) VALUES (NULL, 1, x'00')"})
+    ASSERT_EQ(sqlite3_exec(db, damage, nullptr, nullptr, nullptr), SQLITE_OK) << damage;
   sqlite3_close(db);
   auto damaged = store->unfinished();
-  ASSERT_FALSE(damaged.ok());
-  EXPECT_NE(damaged.error().message.find("audit-2"), std::string::npos);
-  EXPECT_NE(damaged.error().message.find("tile 5"), std::string::npos);
+  ASSERT_TRUE(damaged.ok());
+  ASSERT_EQ(damaged.value().size(), 2u);
+  const engine::UnfinishedAudit& second = damaged.value()[0];
+  EXPECT_EQ(second.job_id, "audit-2");
+  EXPECT_TRUE(second.unreadable.empty());
+  EXPECT_EQ(second.tiles.count(5), 0u);  // left out: computed again
+  ASSERT_EQ(second.tiles.count(6), 1u);
+  EXPECT_EQ(second.tiles.at(6).size(), tile9.size());
+  EXPECT_EQ(damaged.value()[1].job_id, "audit-3");
+  EXPECT_FALSE(damaged.value()[1].unreadable.empty());
 }
 
 }  // namespace

@@ -517,6 +517,58 @@ TEST(AuditE2E, AnAuditStoppedPartWayResumesFromItsTilesAndEqualsAnUninterruptedO
   }
 }
 
+// A client's cancel sticks across a stop: a job cancelled while it waited in the queue (and one
+// cancelled while running) ends CANCELLED after kill -9 and a restart; it is not resumed to DONE.
+TEST(AuditE2E, ACancelledAuditStaysCancelledAcrossAKill) {
+  const std::string dir = testing::temp_dir("audit-cancel-kill");
+  std::string running, queued;
+  {
+    Daemon daemon(dir, {"--audit-jobs", "1"});
+    auto stub = daemon.stub();
+    const std::string ball = upload(*stub, sphere_obj(500.0, 60, 60), "obj");
+    grpc::ClientContext cctx;
+    pb::SceneInfo scene;
+    ASSERT_TRUE(stub->CreateScene(&cctx, pb::CreateSceneRequest(), &scene).ok());
+    pb::PutObjectsRequest batch;
+    batch.set_scene_id(scene.scene_id());
+    for (int i = 0; i < 12; ++i) {
+      pb::SceneObject* o = batch.add_objects();
+      o->set_name("ball" + std::to_string(i));
+      o->set_part_id(ball);
+      *o->mutable_pose() = pose_of({"", "", "", "", Vec3(960.0 * i, 0, 0), 7.0 * i});
+    }
+    pb::PutObjectsResponse ids;
+    grpc::ClientContext pctx;
+    ASSERT_TRUE(stub->PutObjects(&pctx, batch, &ids).ok());
+    pb::StartAuditRequest start;
+    start.set_scene_id(scene.scene_id());
+    start.set_tile_mm(1500.0);
+    start.set_threads(1);
+    start.set_compute_depth(true);
+    for (std::string* id : {&running, &queued}) {
+      pb::AuditJob job;
+      grpc::ClientContext sctx;
+      ASSERT_TRUE(stub->StartAudit(&sctx, start, &job).ok());
+      *id = job.job_id();
+    }
+    for (const std::string& id : {queued, running}) {
+      pb::CancelAuditRequest cancel;
+      cancel.set_job_id(id);
+      pb::AuditProgress progress;
+      grpc::ClientContext xctx;
+      ASSERT_TRUE(stub->CancelAudit(&xctx, cancel, &progress).ok());
+    }
+    daemon.stop(SIGKILL);  // before either could end and be archived
+  }
+  Daemon daemon(dir);
+  auto stub = daemon.stub();
+  for (const std::string& id : {queued, running}) {
+    const pb::AuditReport report = report_when_ended(*stub, id);
+    EXPECT_EQ(report.progress().state(), pb::CANCELLED) << id;
+  }
+  EXPECT_EQ(checkpointed_tiles(dir), 0);
+}
+
 TEST(AuditE2E, EndedAuditsSurviveKill9AndStayUsableAsBaselines) {
   const std::string dir = testing::temp_dir("audit-archive");
   std::string scene_id, job_id, crate_b;
