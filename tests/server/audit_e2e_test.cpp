@@ -444,6 +444,28 @@ pb::AuditReport report_when_ended(pb::Gatekeeper::Stub& stub, const std::string&
   return report;
 }
 
+// A new scene of `count` spheres of 7,200 triangles in a row, each overlapping the next by 40 mm
+// (one pair per 1.5 m tile; with the depth each pair takes a noticeable time). Returns its id.
+std::string sphere_row(pb::Gatekeeper::Stub& stub, int count) {
+  const std::string ball = upload(stub, sphere_obj(500.0, 60, 60), "obj");
+  grpc::ClientContext cctx;
+  pb::SceneInfo scene;
+  EXPECT_TRUE(stub.CreateScene(&cctx, pb::CreateSceneRequest(), &scene).ok());
+  pb::PutObjectsRequest batch;
+  batch.set_scene_id(scene.scene_id());
+  for (int i = 0; i < count; ++i) {
+    pb::SceneObject* o = batch.add_objects();
+    o->set_name("ball" + std::to_string(i));
+    o->set_category("ball");
+    o->set_part_id(ball);
+    *o->mutable_pose() = pose_of({"", "", "", "", Vec3(960.0 * i, 0, 0), 7.0 * i});
+  }
+  pb::PutObjectsResponse ids;
+  grpc::ClientContext pctx;
+  EXPECT_TRUE(stub.PutObjects(&pctx, batch, &ids).ok());
+  return scene.scene_id();
+}
+
 // A nightly audit stopped part way (kill -9, or a stop) resumes when the daemon starts again,
 // from the tiles it had finished (checkpointed in its database), under the same job id; its
 // report equals an audit that ran without interruption, clash for clash and bit for bit.
@@ -456,25 +478,8 @@ TEST(AuditE2E, AnAuditStoppedPartWayResumesFromItsTilesAndEqualsAnUninterruptedO
     {
       Daemon daemon(dir);
       auto stub = daemon.stub();
-      // 16 spheres of 7,200 triangles in a row, each overlapping the next by 40 mm, one pair per
-      // 1.5 m tile; the depth makes each pair take a noticeable time.
-      const std::string ball = upload(*stub, sphere_obj(500.0, 60, 60), "obj");
-      grpc::ClientContext cctx;
-      pb::SceneInfo scene;
-      ASSERT_TRUE(stub->CreateScene(&cctx, pb::CreateSceneRequest(), &scene).ok());
-      pb::PutObjectsRequest batch;
-      batch.set_scene_id(scene.scene_id());
-      for (int i = 0; i < 16; ++i) {
-        pb::SceneObject* o = batch.add_objects();
-        o->set_name("ball" + std::to_string(i));
-        o->set_category("ball");
-        o->set_part_id(ball);
-        *o->mutable_pose() = pose_of({"", "", "", "", Vec3(960.0 * i, 0, 0), 7.0 * i});
-      }
-      pb::PutObjectsResponse ids;
-      grpc::ClientContext pctx;
-      ASSERT_TRUE(stub->PutObjects(&pctx, batch, &ids).ok());
-      start.set_scene_id(scene.scene_id());
+      const std::string scene_id = sphere_row(*stub, 16);
+      start.set_scene_id(scene_id);
       start.set_clearance_mm(1.0);
       start.set_tile_mm(1500.0);
       start.set_threads(1);
@@ -525,23 +530,9 @@ TEST(AuditE2E, ACancelledAuditStaysCancelledAcrossAKill) {
   {
     Daemon daemon(dir, {"--audit-jobs", "1"});
     auto stub = daemon.stub();
-    const std::string ball = upload(*stub, sphere_obj(500.0, 60, 60), "obj");
-    grpc::ClientContext cctx;
-    pb::SceneInfo scene;
-    ASSERT_TRUE(stub->CreateScene(&cctx, pb::CreateSceneRequest(), &scene).ok());
-    pb::PutObjectsRequest batch;
-    batch.set_scene_id(scene.scene_id());
-    for (int i = 0; i < 12; ++i) {
-      pb::SceneObject* o = batch.add_objects();
-      o->set_name("ball" + std::to_string(i));
-      o->set_part_id(ball);
-      *o->mutable_pose() = pose_of({"", "", "", "", Vec3(960.0 * i, 0, 0), 7.0 * i});
-    }
-    pb::PutObjectsResponse ids;
-    grpc::ClientContext pctx;
-    ASSERT_TRUE(stub->PutObjects(&pctx, batch, &ids).ok());
+    const std::string scene_id = sphere_row(*stub, 12);
     pb::StartAuditRequest start;
-    start.set_scene_id(scene.scene_id());
+    start.set_scene_id(scene_id);
     start.set_tile_mm(1500.0);
     start.set_threads(1);
     start.set_compute_depth(true);
