@@ -5,11 +5,14 @@
 #include "tests/support/random_meshes.h"
 #include "kernel/core/units.h"
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <map>
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 namespace gk::testing {
 using engine::AuditObject;
@@ -82,10 +85,9 @@ FactoryScene generate_factory_scene(const FactorySceneOptions& options) {
   const std::vector<std::shared_ptr<const MeshBvh>> machines = {
       shared_mesh("meshes/occt/TR12J_OCC64K.stl", 1.0), shared_mesh("meshes/occt/motor.stl", 10.0),
       shared_mesh("meshes/cgal/turbine.off", 10.0), shared_mesh("meshes/cgal/fandisk_large.off", 50.0)};
-  // The mesh an object gets: the shared one, or its own copy.
-  auto own = [&](const std::shared_ptr<const MeshBvh>& shared) {
-    return options.distinct_meshes ? bvh_of(shared->mesh()) : shared;
-  };
+  // Robot links and machines share the catalogue's mesh here; with distinct_meshes each gets its
+  // own copy below, built on every core.
+  auto own = [](const std::shared_ptr<const MeshBvh>& shared) { return shared; };
   std::size_t robot_triangles = 0;
   Aabb robot_box;
   for (const auto& m : robot) {
@@ -161,6 +163,22 @@ FactoryScene generate_factory_scene(const FactorySceneOptions& options) {
   scene.rules = {{"robot links of one robot", "robot", "robot", true},
                  {"bolts resting on racks", "bolt", "rack", false},
                  {"bolts lying on conveyors", "bolt", "conveyor", false}};
+  if (options.distinct_meshes) {
+    std::vector<std::size_t> copies;
+    for (std::size_t i = 0; i < scene.objects.size(); ++i)
+      if (scene.objects[i].category == "robot" || scene.objects[i].category == "machine") copies.push_back(i);
+    std::atomic<std::size_t> next{0};
+    auto work = [&] {
+      for (std::size_t k = next++; k < copies.size(); k = next++) {
+        AuditObject& o = scene.objects[copies[k]];
+        o.mesh = bvh_of(o.mesh->mesh());
+      }
+    };
+    std::vector<std::thread> pool;
+    for (unsigned t = 1; t < std::max(1u, std::thread::hardware_concurrency()); ++t) pool.emplace_back(work);
+    work();
+    for (std::thread& t : pool) t.join();
+  }
   std::map<const MeshBvh*, int> unique;
   for (const AuditObject& o : scene.objects) unique[o.mesh.get()] = 1;
   scene.unique_meshes = unique.size();
