@@ -7,6 +7,7 @@
 #include "mesh_io/mesh_file_reader.h"
 #include "clients/gatekeeper_client/audit_report.h"
 #include "tests/server/daemon_fixture.h"
+#include "tests/support/sanitized_build.h"
 #include "tests/support/random_meshes.h"
 
 #include <gtest/gtest.h>
@@ -446,8 +447,10 @@ pb::AuditReport report_when_ended(pb::Gatekeeper::Stub& stub, const std::string&
 
 // A new scene of `count` spheres of 7,200 triangles in a row, each overlapping the next by 40 mm
 // (one pair per 1.5 m tile; with the depth each pair takes a noticeable time). Returns its id.
+// Under the sanitizers, where everything is several times slower, spheres of 1,800 triangles.
 std::string sphere_row(pb::Gatekeeper::Stub& stub, int count) {
-  const std::string ball = upload(stub, sphere_obj(500.0, 60, 60), "obj");
+  const int rings = testing::kSanitizedBuild ? 30 : 60;
+  const std::string ball = upload(stub, sphere_obj(500.0, rings, rings), "obj");
   grpc::ClientContext cctx;
   pb::SceneInfo scene;
   EXPECT_TRUE(stub.CreateScene(&cctx, pb::CreateSceneRequest(), &scene).ok());
