@@ -192,8 +192,7 @@ void AuditJob::run(PartRegistry& parts, std::function<void(const AuditSnapshot&)
       c.b = std::max(ia->second, ib->second);
       previous.clashes.push_back(c);
     }
-    std::sort(previous.clashes.begin(), previous.clashes.end(),
-              [](const PairClash& l, const PairClash& r) { return std::tie(l.a, l.b) < std::tie(r.a, r.b); });
+    sort_in_pair_order(previous.clashes);
     update([](AuditSnapshot& s) { s.reaudit = true; });
     result = reaudit_scene(objects, previous, changed, options);
   } else {
@@ -203,8 +202,7 @@ void AuditJob::run(PartRegistry& parts, std::function<void(const AuditSnapshot&)
   AuditResult& r = result.value();
   if (!resumed.empty()) {
     r.clashes.insert(r.clashes.end(), resumed.begin(), resumed.end());
-    std::sort(r.clashes.begin(), r.clashes.end(),
-              [](const PairClash& l, const PairClash& x) { return std::tie(l.a, l.b) < std::tie(x.a, x.b); });
+    sort_in_pair_order(r.clashes);
   }
   std::vector<ClashRecord> ordered;
   for (const PairClash& c : r.clashes)

@@ -250,6 +250,13 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
   std::vector<char> skipped(result.tiles, 0);
   for (std::size_t t : options.skip_tiles)
     if (t < skipped.size()) skipped[t] = 1;
+  // A pair's estimated cost: both meshes' triangles. Each tile's sum, skipped tiles included, so
+  // that every process of a distributed audit plans the same.
+  auto pair_cost = [&](const IndexPair& p) {
+    return static_cast<double>(objects[p.first].mesh->mesh().triangle_count() + objects[p.second].mesh->mesh().triangle_count());
+  };
+  std::vector<double>& tile_cost = result.tile_costs;
+  tile_cost.assign(result.tiles, 0.0);
   std::vector<IndexPair> work;
   std::vector<std::size_t> work_tile;
   std::size_t done_before = 0;
@@ -257,7 +264,10 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
     const IndexPair& p = candidates[i];
     if (matching_rule(options.rules, objects[p.first], objects[p.second]) >= 0) {
       ++result.excluded_by_rules;
-    } else if (skipped[owner[i]]) {
+      continue;
+    }
+    tile_cost[owner[i]] += pair_cost(p);
+    if (skipped[owner[i]]) {
       ++done_before;
     } else {
       work.push_back(p);
@@ -269,21 +279,9 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
 
   // ---- narrow phase: tile by tile, the costliest tiles and pairs first ----
   const auto t_narrow = Clock::now();
-  auto cost = [&](std::size_t i) {
-    return objects[work[i].first].mesh->mesh().triangle_count() + objects[work[i].second].mesh->mesh().triangle_count();
-  };
-  std::vector<double>& tile_cost = result.tile_costs;
-  tile_cost.assign(result.tiles, 0.0);
+  auto cost = [&](std::size_t i) { return pair_cost(work[i]); };
   std::vector<std::size_t> tile_left(result.tiles, 0);  // pairs not yet done, per tile
-  for (std::size_t i = 0; i < work.size(); ++i) {
-    tile_cost[work_tile[i]] += static_cast<double>(cost(i));
-    ++tile_left[work_tile[i]];
-  }
-  // Skipped tiles' costs too, so every process of a distributed audit plans the same.
-  for (std::size_t i = 0; i < candidates.size(); ++i)
-    if (skipped[owner[i]] && matching_rule(options.rules, objects[candidates[i].first], objects[candidates[i].second]) < 0)
-      tile_cost[owner[i]] += static_cast<double>(objects[candidates[i].first].mesh->mesh().triangle_count() +
-                                                 objects[candidates[i].second].mesh->mesh().triangle_count());
+  for (std::size_t t : work_tile) ++tile_left[t];
   if (options.broad_phase_only) {
     result.times.total_s = seconds_since(t0);
     return result;
@@ -340,9 +338,7 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
   });
   for (std::size_t i = 0; i < work.size(); ++i)
     if (state[i] == 2) result.clashes.push_back(std::move(slots[i]));
-  // Tile order is not (a, b) order when the tiles are several.
-  std::sort(result.clashes.begin(), result.clashes.end(),
-            [](const PairClash& l, const PairClash& r) { return std::tie(l.a, l.b) < std::tie(r.a, r.b); });
+  sort_in_pair_order(result.clashes);  // tile order is not (a, b) order when the tiles are several
   result.pairs_done = done;
   result.cancelled = broad_phase_cancelled || done < work.size() + done_before;
   result.times.narrow_s = seconds_since(t_narrow);
@@ -351,6 +347,10 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
   progress.clashes = clashes;
   report(true);
   return result;
+}
+
+void sort_in_pair_order(std::vector<PairClash>& clashes) {
+  std::sort(clashes.begin(), clashes.end(), [](const PairClash& l, const PairClash& r) { return std::tie(l.a, l.b) < std::tie(r.a, r.b); });
 }
 
 Result<AuditResult> reaudit_scene(const std::vector<AuditObject>& objects, const AuditResult& previous,
@@ -370,8 +370,7 @@ Result<AuditResult> reaudit_scene(const std::vector<AuditObject>& objects, const
   AuditResult out = fresh.value();
   for (const PairClash& c : previous.clashes)
     if (!is_changed[c.a] && !is_changed[c.b]) out.clashes.push_back(c);
-  std::sort(out.clashes.begin(), out.clashes.end(),
-            [](const PairClash& l, const PairClash& r) { return std::tie(l.a, l.b) < std::tie(r.a, r.b); });
+  sort_in_pair_order(out.clashes);
   return out;
 }
 

@@ -124,6 +124,9 @@ struct AuditResult {
 
 Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const AuditOptions& options);
 
+// The canonical order of an audit's clashes, (a, b): what every report and merge is sorted by.
+void sort_in_pair_order(std::vector<PairClash>& clashes);
+
 // Incremental re-audit: the previous result with every pair involving a changed object recomputed
 // (the changed objects' new poses are in `objects`). Equals a full audit of `objects`.
 Result<AuditResult> reaudit_scene(const std::vector<AuditObject>& objects, const AuditResult& previous,

@@ -202,9 +202,4 @@ void MeshBvh::refit(std::shared_ptr<const TriangleMesh> moved_mesh) {
   refit_nodes(nodes_, [this](int k) { return ordered_triangle(k); });
 }
 
-std::size_t MeshBvh::heap_bytes() const {
-  return nodes_.capacity() * sizeof(BvhNode) + ordered_faces_.capacity() * sizeof(TriangleMesh::Face) +
-         ordered_vertices_.capacity() * sizeof(Vec3) + ordered_to_mesh_.capacity() * sizeof(std::uint32_t);
-}
-
 }  // namespace gk

@@ -63,9 +63,6 @@ class MeshBvh {
   std::uint32_t mesh_triangle_index(int k) const { return ordered_to_mesh_[k]; }
   bool ordered_is_degenerate(int k) const { return mesh_->is_degenerate(ordered_to_mesh_[k]); }
 
-  // Bytes this object keeps on the heap (the mesh not included).
-  std::size_t heap_bytes() const;
-
  private:
   MeshBvh() = default;
   // The tree-ordered faces and vertex copy from ordered_to_mesh_ (after a build or a load).

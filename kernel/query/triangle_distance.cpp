@@ -120,7 +120,10 @@ double plane_separation(const Triangle& t, const Triangle& other) {
   }
   // One square root for the error, one for the length, and only when a side is clear of zero.
   if (!(lo > 0.0) && !(hi < 0.0)) return 0.0;
-  const double error = 16.0 * std::numeric_limits<double>::epsilon() * std::sqrt(e1.squaredNorm() * e2.squaredNorm() * reach_sq);
+  // Each normal component is a difference of two products of rounded edge components: off by at
+  // most about 6 eps |e1| |e2|, so |n| by 11 eps |e1| |e2|; the dot product adds 3 eps |n| |d| and d
+  // itself eps |d|. 32 eps covers the sum with room to spare.
+  const double error = 32.0 * std::numeric_limits<double>::epsilon() * std::sqrt(e1.squaredNorm() * e2.squaredNorm() * reach_sq);
   if (lo > error) return (lo - error) / std::sqrt(len_sq);
   if (hi < -error) return (-hi - error) / std::sqrt(len_sq);
   return 0.0;

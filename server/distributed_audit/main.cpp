@@ -243,8 +243,7 @@ int main(int argc, char** argv) {
       clashes.insert(clashes.end(), tile.value().begin(), tile.value().end());
     }
     if (!missing.empty()) return fail(rank, std::to_string(missing.size()) + " tiles have no result: run the same command again");
-    std::sort(clashes.begin(), clashes.end(),
-              [](const engine::PairClash& l, const engine::PairClash& r) { return std::tie(l.a, l.b) < std::tie(r.a, r.b); });
+    engine::sort_in_pair_order(clashes);
     const auto& records = placed.value().records;
     nlohmann::json report;
     report["scene_id"] = scene_id;

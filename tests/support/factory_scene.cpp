@@ -85,9 +85,6 @@ FactoryScene generate_factory_scene(const FactorySceneOptions& options) {
   const std::vector<std::shared_ptr<const MeshBvh>> machines = {
       shared_mesh("meshes/occt/TR12J_OCC64K.stl", 1.0), shared_mesh("meshes/occt/motor.stl", 10.0),
       shared_mesh("meshes/cgal/turbine.off", 10.0), shared_mesh("meshes/cgal/fandisk_large.off", 50.0)};
-  // Robot links and machines share the catalogue's mesh here; with distinct_meshes each gets its
-  // own copy below, built on every core.
-  auto own = [](const std::shared_ptr<const MeshBvh>& shared) { return shared; };
   std::size_t robot_triangles = 0;
   Aabb robot_box;
   for (const auto& m : robot) {
@@ -116,12 +113,12 @@ FactoryScene generate_factory_scene(const FactorySceneOptions& options) {
       for (int r = 0; r < 2; ++r) {
         const std::string group = bay + "/robot" + std::to_string(r);
         const RigidTransform base = RigidTransform::from_axis_angle(Vec3::UnitZ(), turn(rng), centre + Vec3(r * robot_spacing, 0, 0));
-        for (std::size_t k = 0; k < robot.size(); ++k) b.add(group + "/link" + std::to_string(k), "robot", group, own(robot[k]), base);
+        for (std::size_t k = 0; k < robot.size(); ++k) b.add(group + "/link" + std::to_string(k), "robot", group, robot[k], base);
       }
       b.add(bay + "/conveyor", "conveyor", "", conveyor, RigidTransform::from_translation(centre + Vec3(0, conveyor_offset, 0)));
     } else if (heavy) {
       const auto& m = machines[i % machines.size()];
-      b.add(bay + "/machine", "machine", "", own(m), RigidTransform::from_axis_angle(Vec3::UnitZ(), turn(rng), centre));
+      b.add(bay + "/machine", "machine", "", m, RigidTransform::from_axis_angle(Vec3::UnitZ(), turn(rng), centre));
       for (int k = 0; k < 6; ++k)  // bolts on the floor around it
         b.add(bay + "/bolt" + std::to_string(k), "bolt", "", bolt,
               RigidTransform::from_translation(centre + Vec3(-3000 + 1000 * k, -3500, 0)));
@@ -163,6 +160,8 @@ FactoryScene generate_factory_scene(const FactorySceneOptions& options) {
   scene.rules = {{"robot links of one robot", "robot", "robot", true},
                  {"bolts resting on racks", "bolt", "rack", false},
                  {"bolts lying on conveyors", "bolt", "conveyor", false}};
+  // Robot links and machines share the catalogue's meshes above; with distinct_meshes each gets
+  // its own copy, built on every core.
   if (options.distinct_meshes) {
     std::vector<std::size_t> copies;
     for (std::size_t i = 0; i < scene.objects.size(); ++i)

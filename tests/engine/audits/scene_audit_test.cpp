@@ -177,7 +177,7 @@ TEST(SceneAudit, TileCheckpointsResumeToTheUninterruptedResult) {
   ASSERT_GT(tiles.size(), 4u);
   std::vector<PairClash> joined;
   for (const auto& [tile, clashes] : tiles) joined.insert(joined.end(), clashes.begin(), clashes.end());
-  std::sort(joined.begin(), joined.end(), [](const PairClash& l, const PairClash& r) { return std::tie(l.a, l.b) < std::tie(r.a, r.b); });
+  sort_in_pair_order(joined);
   AuditResult from_tiles = full;
   from_tiles.clashes = joined;
   expect_same_clashes(full, from_tiles);
@@ -222,8 +222,7 @@ TEST(SceneAudit, TileCheckpointsResumeToTheUninterruptedResult) {
     EXPECT_EQ(resumed.pairs_done, full.pairs_done);
     EXPECT_EQ(resumed.candidate_pairs, full.candidate_pairs);
     for (const auto& [tile, clashes] : finished) resumed.clashes.insert(resumed.clashes.end(), clashes.begin(), clashes.end());
-    std::sort(resumed.clashes.begin(), resumed.clashes.end(),
-              [](const PairClash& l, const PairClash& r) { return std::tie(l.a, l.b) < std::tie(r.a, r.b); });
+    sort_in_pair_order(resumed.clashes);
     expect_same_clashes(full, resumed);
   }
 }
