@@ -3,9 +3,13 @@
 // between rows), then drags one more cube along the grid's rows through a DragObject stream,
 // midway between two rows, so that every neighbour in both rows passes 30 mm away (inside the
 // clearance), and prints the per-frame round trip and the daemon's
-// own time per frame.
+// own time per frame. With --mesh, a mesh file (in mm) takes the cube's place, for the static
+// copies and the dragged one alike: rows of copies two box widths apart along x, the dragged copy
+// midway between two rows with 30 mm between the boxes, swinging --weave mm either side (so it is
+// driven into the rows' boxes and, where the meshes reach that far, into the meshes).
 //
 //   gatekeeper-dragbench --address 127.0.0.1:50051 [--objects 2000] [--frames 2000] [--clearance 50]
+//                        [--mesh FILE] [--weave MM]
 #include "clients/channel_options.h"
 #include "clients/gatekeeper_client/upload.h"
 #include "gatekeeper/v1/gatekeeper.grpc.pb.h"
@@ -17,6 +21,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -59,6 +65,10 @@ int main(int argc, char** argv) {
   app.add_option("--objects", objects)->check(CLI::Range(1, 100000));
   app.add_option("--frames", frames)->check(CLI::Range(1, 1000000));
   app.add_option("--clearance", clearance)->check(CLI::Range(0.0, 1000.0));
+  std::string mesh_path;
+  double weave = 0.0;
+  app.add_option("--mesh", mesh_path, "a mesh file (stl, obj, off, ply) in mm instead of the 1 m cube");
+  app.add_option("--weave", weave, "the dragged object's swing either side of the row's midline [mm]")->check(CLI::Range(0.0, 1e5));
   CLI11_PARSE(app, argc, argv);
   std::shared_ptr<grpc::Channel> channel;
   try {
@@ -72,13 +82,34 @@ int main(int argc, char** argv) {
     return 2;
   }
   auto stub = pb::Gatekeeper::NewStub(channel);
-  const std::string bytes = cube_obj();
+  std::string bytes = cube_obj();
+  gk::client::UploadOptions upload_options;
+  upload_options.format = "obj";
+  if (!mesh_path.empty()) {
+    std::ifstream in(mesh_path, std::ios::binary);
+    std::ostringstream content;
+    content << in.rdbuf();
+    if (!in) {
+      std::fprintf(stderr, "cannot read %s\n", mesh_path.c_str());
+      return 2;
+    }
+    bytes = content.str();
+    upload_options.format = gk::client::format_of(mesh_path);
+  }
   pb::PartInfo cube;
   {
-    gk::client::UploadOptions upload_options;
-    upload_options.format = "obj";
-    if (!gk::client::upload_part(*stub, bytes, upload_options, &cube).ok()) return 1;
+    const grpc::Status uploaded = gk::client::upload_part(*stub, bytes, upload_options, &cube);
+    if (!uploaded.ok()) {
+      std::fprintf(stderr, "upload: %s\n", uploaded.error_message().c_str());
+      return 1;
+    }
   }
+  // Pitches from the part's box: copies two widths apart along x; rows so that a copy midway
+  // between two has 30 mm to the boxes of both.
+  const double width = cube.bounds_max().x_mm() - cube.bounds_min().x_mm();
+  const double depth = cube.bounds_max().y_mm() - cube.bounds_min().y_mm();
+  const double x_pitch = mesh_path.empty() ? 2000.0 : 2.0 * width;
+  const double row_pitch = mesh_path.empty() ? kRowPitchMm : 2.0 * depth + 60.0;
   pb::SceneInfo scene;
   {
     grpc::ClientContext ctx;
@@ -94,7 +125,7 @@ int main(int argc, char** argv) {
     pb::SceneObject* o = batch.add_objects();
     o->set_part_id(cube.part_id());
     o->set_category("cube");
-    *o->mutable_pose() = at(2000.0 * (i % side), kRowPitchMm * (i / side));
+    *o->mutable_pose() = at(x_pitch * (i % side), row_pitch * (i / side));
   }
   {
     grpc::ClientContext fill;
@@ -109,7 +140,7 @@ int main(int argc, char** argv) {
     put.set_scene_id(scene.scene_id());
     put.mutable_object()->set_part_id(cube.part_id());
     put.mutable_object()->set_name("dragged");
-    *put.mutable_object()->mutable_pose() = at(-3000, 0.5 * kRowPitchMm);
+    *put.mutable_object()->mutable_pose() = at(-1.5 * x_pitch, 0.5 * row_pitch);
     pb::MoveResult r;
     if (!stub->PutObject(&ctx, put, &r).ok()) return 1;
     dragged = r.object_id();
@@ -117,8 +148,8 @@ int main(int argc, char** argv) {
   grpc::ClientContext ctx;
   auto stream = stub->DragObject(&ctx);
   std::vector<double> round_trip_us, server_us;
-  long contacts = 0;
-  const double row_length = 2000.0 * side + 2000.0;
+  long contacts = 0, colliding_frames = 0;
+  const double row_length = x_pitch * (side + 1);
   for (int f = 0; f < frames; ++f) {
     // Along a row, 40 mm per frame, then on to the next row.
     const double s = 40.0 * f;
@@ -127,18 +158,22 @@ int main(int argc, char** argv) {
     move.set_scene_id(scene.scene_id());
     move.set_object_id(dragged);
     move.set_clearance_mm(clearance);
-    *move.mutable_pose() = at(-1000.0 + std::fmod(s, row_length), kRowPitchMm * row + 0.5 * kRowPitchMm);
+    *move.mutable_pose() = at(-0.5 * x_pitch + std::fmod(s, row_length),
+                              row_pitch * row + 0.5 * row_pitch + weave * std::sin(0.02 * f));
     const auto t0 = Clock::now();
     pb::MoveResult r;
     if (!stream->Write(move) || !stream->Read(&r)) break;
     round_trip_us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count());
     server_us.push_back(r.elapsed_us());
     contacts += r.contacts_size();
+    if (r.verdict() == pb::VERDICT_COLLISION) ++colliding_frames;
   }
   stream->WritesDone();
   const grpc::Status status = stream->Finish();
+  std::printf("%s: %u triangles\n", mesh_path.empty() ? "1 m cube" : mesh_path.c_str(), cube.triangles());
   std::printf("%d static objects (filled in %.1f s), %zu frames, clearance %.0f mm, %.2f contacts per frame\n", objects, fill_s,
               round_trip_us.size(), clearance, static_cast<double>(contacts) / static_cast<double>(std::max<std::size_t>(1, round_trip_us.size())));
+  std::printf("frames answered COLLISION: %ld\n", colliding_frames);
   std::printf("round trip: p50 %.0f us, p90 %.0f us, p99 %.0f us, max %.0f us\n", pct(round_trip_us, 0.5), pct(round_trip_us, 0.9),
               pct(round_trip_us, 0.99), pct(round_trip_us, 1.0));
   std::printf("daemon (store + answer): p50 %.0f us, p90 %.0f us, p99 %.0f us, max %.0f us\n", pct(server_us, 0.5), pct(server_us, 0.9),

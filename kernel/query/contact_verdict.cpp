@@ -145,22 +145,16 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
   creq.stop = options.stop;
   auto collided = collide(a, pose_a, b, pose_b, creq);
   if (!collided.ok()) return collided.error();
-  if (oriented && collided.value().truncated) {
-    // Touching or crossing is decided over every pair (thousands of coplanar pairs where a finely
-    // meshed box rests on a plate): the cap applies only to what is reported.
-    creq.max_contacts = std::numeric_limits<std::size_t>::max();
-    collided = collide(a, pose_a, b, pose_b, creq);
-    if (!collided.ok()) return collided.error();
-  }
-  CollisionResult& col = collided.value();
-  out.stats = col.stats;
 
-  if (col.colliding) {
-    out.distance_mm = 0.0;
-    out.point_a = out.point_b = col.contacts.front().point;
-    std::size_t decided_on_degenerate = 0;
-    const RigidTransform b_in_a = relative_transform(pose_a, pose_b);
-    const RigidTransform world_to_a = pose_a.inverse();
+  // Which listed contacts cross (closed meshes: not a touch from outside), and how many were
+  // decided on zero-area triangles.
+  std::size_t decided_on_degenerate = 0;
+  const RigidTransform b_in_a = relative_transform(pose_a, pose_b);
+  const RigidTransform world_to_a = pose_a.inverse();
+  const auto classify = [&](const CollisionResult& col) {
+    out.first_crossing = -1;
+    out.crossing_pairs = 0;
+    decided_on_degenerate = 0;
     for (const Contact& c : col.contacts) {
       if (c.involves_degenerate) {
         ++decided_on_degenerate;
@@ -182,6 +176,26 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
         ++out.crossing_pairs;
       }
     }
+  };
+  classify(collided.value());
+  // One crossing pair among those listed makes the pair a COLLISION whatever the rest are. When
+  // none crosses but the list is cut short, touching or crossing is decided over every pair
+  // (thousands of coplanar pairs where a finely meshed box rests on a plate): the cap applies
+  // only to what is reported.
+  bool crossings_counted_in_full = !collided.value().truncated;
+  if (oriented && collided.value().truncated && out.crossing_pairs == 0) {
+    creq.max_contacts = std::numeric_limits<std::size_t>::max();
+    collided = collide(a, pose_a, b, pose_b, creq);
+    if (!collided.ok()) return collided.error();
+    classify(collided.value());
+    crossings_counted_in_full = true;
+  }
+  CollisionResult& col = collided.value();
+  out.stats = col.stats;
+
+  if (col.colliding) {
+    out.distance_mm = 0.0;
+    out.point_a = out.point_b = col.contacts.front().point;
     out.contacts = std::move(col.contacts);
     out.contacts_truncated = col.truncated;
     if (out.contacts.size() > options.max_contacts) {
@@ -196,7 +210,8 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
     }
     if (out.crossing_pairs > 0) {
       out.verdict = Verdict::kCollision;
-      out.reason = oriented ? std::to_string(out.crossing_pairs) + " triangle pairs cross"
+      out.reason = oriented ? (crossings_counted_in_full ? "" : "at least ") + std::to_string(out.crossing_pairs) +
+                                  " triangle pairs cross"
                             : "meshes intersect (open meshes: any contact counts as a collision)";
     } else if (decided_on_degenerate > 0) {
       out.verdict = Verdict::kInconclusive;
@@ -233,7 +248,6 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
   // connected body of each mesh is tested against the other when that one is closed, whether or
   // not the body is closed itself (an open scan inside a crate interferes with it).
   {
-    const RigidTransform b_in_a = relative_transform(pose_a, pose_b);
     // Ray parity through the BVH decides it in O(log n); the winding number (O(n)) only when
     // every ray was degenerate.
     auto inside = [](const MeshBvh& m, const Vec3& p) { return inside_closed_mesh(m, p); };

@@ -68,6 +68,7 @@ Result<CollisionResult> collide(const MeshBvh& a, const RigidTransform& pose_a, 
       if (!test_leaves(frame, p.a, p.b, request, result)) break;
       continue;
     }
+    if (leaf_a ? frame.leaf_a_misses_node_b(p.a, p.b) : leaf_b && frame.leaf_b_misses_node_a(p.b, p.a)) continue;
     const bool split_a = !leaf_a && (leaf_b || frame.size_a(p.a) >= frame.size_b(p.b));
     if (split_a) {
       stack[top++] = {frame.second_child_a(p.a), p.b};

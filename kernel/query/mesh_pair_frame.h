@@ -61,8 +61,20 @@ class MeshPairFrame {
                          slack_ + margin);
   }
 
-  // A lower bound of the distance between anything in node_a and anything in node_b: the larger of
-  // the box-to-box gaps measured along A's axes and along B's axes.
+  // True when no triangle of leaf_a can meet node_b's box: each triangle and the box projected on
+  // the triangle's normal are apart. Any direction is a valid axis, so a rounded normal costs
+  // tightness, never correctness; the slack (scaled by the axis' length) covers the dot products'
+  // rounding, and a degenerate triangle (zero normal) never counts as missing. This keeps a large
+  // flat triangle (a conveyor's top) from opening every node of a dense mesh driven into it.
+  bool leaf_a_misses_node_b(int leaf_a, int node_b) const {
+    return leaf_misses_box(*a_, na_[leaf_a], b_in_a_, nb_[node_b]);
+  }
+  bool leaf_b_misses_node_a(int leaf_b, int node_a) const {
+    return leaf_misses_box(*b_, nb_[leaf_b], a_in_b_, na_[node_a]);
+  }
+
+  // A lower bound of the distance between anything in node_a and anything in node_b: the largest
+  // of the box-to-box gaps measured along A's axes, along B's axes and along the line of centres.
   double nodes_lower_bound(int node_a, int node_b) const {
     const BvhNode& a = na_[node_a];
     const BvhNode& b = nb_[node_b];
@@ -70,8 +82,13 @@ class MeshPairFrame {
     const Vec3 eb = b.half_extent();
     const Vec3 d = b_in_a_.apply(b.center()) - a.center();
     const Vec3 gap_a = (d.cwiseAbs() - ea - abs_r_ * eb).cwiseMax(0.0);
-    const Vec3 gap_b = ((b_in_a_.rotation.transpose() * d).cwiseAbs() - abs_r_.transpose() * ea - eb).cwiseMax(0.0);
-    return std::max(std::max(gap_a.norm(), gap_b.norm()) - slack_, 0.0);
+    const Vec3 d_in_b = b_in_a_.rotation.transpose() * d;
+    const Vec3 gap_b = (d_in_b.cwiseAbs() - abs_r_.transpose() * ea - eb).cwiseMax(0.0);
+    // Along the line of centres: |d| minus both boxes' support in that direction (tightest at
+    // rotations where the boxes' own axes are oblique to each other).
+    const double length = d.norm();
+    const double along = length - (d.cwiseAbs().dot(ea) + d_in_b.cwiseAbs().dot(eb)) / std::max(length, 1e-300);
+    return std::max(std::max({gap_a.norm(), gap_b.norm(), along}) - slack_, 0.0);
   }
 
   // The box bound, tightened when exactly one side is a leaf: the leaf's triangles against the
@@ -117,6 +134,28 @@ class MeshPairFrame {
                                    b_in_a_.translation.cwiseAbs().maxCoeff() + rb.min.cwiseAbs().maxCoeff() +
                                        rb.max.cwiseAbs().maxCoeff(), 1.0});
     slack_ = tolerances::kBoxSlackRelative * scale;
+  }
+
+  // Every triangle of `leaf` (of `leaf_mesh`) is apart from `box`, a node of the other mesh whose
+  // frame `box_in_leaf` maps into the leaf's.
+  bool leaf_misses_box(const MeshBvh& leaf_mesh, const BvhNode& leaf, const RigidTransform& box_in_leaf, const BvhNode& box) const {
+    const Vec3 c = box_in_leaf.apply(box.center());
+    const Vec3 e = box.half_extent();
+    for (int k = leaf.first_triangle(); k <= leaf.last_triangle(); ++k)
+      if (!triangle_misses_box(leaf_mesh.ordered_triangle(k), c, box_in_leaf.rotation, e)) return false;
+    return true;
+  }
+
+  // The triangle and the box (centre c, axes the columns of `axes`, half extents e, all in the
+  // triangle's frame) are apart along the triangle's normal.
+  bool triangle_misses_box(const Triangle& t, const Vec3& c, const Mat3& axes, const Vec3& e) const {
+    const Vec3 n = (t[1] - t[0]).cross(t[2] - t[0]);
+    const double s0 = n.dot(t[0]), s1 = n.dot(t[1]), s2 = n.dot(t[2]);
+    const double lo = std::min({s0, s1, s2}), hi = std::max({s0, s1, s2});
+    const double centre = n.dot(c);
+    const double radius = (axes.transpose() * n).cwiseAbs().dot(e);
+    const double tol = slack_ * n.lpNorm<1>();
+    return centre - radius > hi + tol || centre + radius < lo - tol;
   }
 
   const MeshBvh* a_;

@@ -5,6 +5,7 @@
 // median per query, ours / FCL / ratio FCL÷ours), each mesh's build rate and memory per
 // triangle, and a hash of our answers that must not change across optimisations.
 //   build/tests/benchmarks/kernel_fcl_table [poses per kind, default 200] [triangles per leaf, default the kernel's]
+//                                            [only this pair, 1-7, for profiling]
 #include "kernel/bvh/mesh_bvh.h"
 #include "kernel/query/mesh_collision.h"
 #include "kernel/query/mesh_distance.h"
@@ -82,6 +83,7 @@ Subject load(const std::string& relative, double diagonal_mm, int leaf_size) {
 struct Answer {
   double value = 0.0;  // contacts, or distance
   bool collides = false;
+  long long node_pairs = 0, triangle_pairs = 0;  // our work (not counted for FCL)
 };
 
 Answer collide_ours(const Subject& a, const Subject& b, const RigidTransform& pb) {
@@ -98,7 +100,7 @@ Answer collide_fcl(const Subject& a, const Subject& b, const RigidTransform& pb)
 }
 Answer distance_ours(const Subject& a, const Subject& b, const RigidTransform& pb) {
   const auto r = gk::distance(*a.ours, RigidTransform{}, *b.ours, pb).value();
-  return {r.distance_mm, r.distance_mm <= 0.0};
+  return {r.distance_mm, r.distance_mm <= 0.0, r.stats.node_pairs_tested, r.stats.triangle_pairs_tested};
 }
 Answer distance_fcl(const Subject& a, const Subject& b, const RigidTransform& pb) {
   const fcl::DistanceRequestd req(true);
@@ -139,6 +141,7 @@ struct PairSpec {
 int main(int argc, char** argv) {
   const int per_kind = argc > 1 ? std::max(10, std::atoi(argv[1])) : 200;
   const int leaf_size = argc > 2 ? std::max(1, std::atoi(argv[2])) : gk::BvhBuildOptions{}.leaf_size;
+  const int only_pair = argc > 3 ? std::atoi(argv[3]) : 0;
   // Scans, CAD tessellations, robot links, a thin part and very unequal sizes; sizes in mm.
   const PairSpec specs[] = {
       {"meshes/fcl/env.obj", 6000.0, "meshes/fcl/rob.obj", 600.0, "classic (FCL's env/rob)"},
@@ -165,6 +168,7 @@ int main(int argc, char** argv) {
   double worst_ratio = 1e300;
   std::string worst_line;
   for (std::size_t p = 0; p < std::size(specs); ++p) {
+    if (only_pair > 0 && static_cast<int>(p) + 1 != only_pair) continue;
     const PairSpec& spec = specs[p];
     const Subject& a = subject(spec.a, spec.diagonal_a);
     const Subject& b = subject(spec.b, spec.diagonal_b);
@@ -180,6 +184,7 @@ int main(int argc, char** argv) {
                                           {"near", &near}}) {
       std::vector<double> c_ours, c_fcl, d_ours, d_fcl, dfree_ours, dfree_fcl;
       int agree_c = 0, agree_d = 0;
+      double d_node_pairs = 0.0, d_triangle_pairs = 0.0;
       for (const RigidTransform& pose : *poses) {
         auto t0 = Clock::now();
         const Answer co = collide_ours(a, b, pose);
@@ -191,6 +196,8 @@ int main(int argc, char** argv) {
         const Answer dq = distance_ours(a, b, pose);
         const double du = ms_since(t0) * 1e3;
         d_ours.push_back(du);
+        d_node_pairs += static_cast<double>(dq.node_pairs);
+        d_triangle_pairs += static_cast<double>(dq.triangle_pairs);
         t0 = Clock::now();
         const Answer df = distance_fcl(a, b, pose);
         const double dfu = ms_since(t0) * 1e3;
@@ -224,6 +231,8 @@ int main(int argc, char** argv) {
       line("collide", c_ours, c_fcl, agree_c, poses->size());
       line("distance", d_ours, d_fcl, agree_d, poses->size());
       line("dist_free", dfree_ours, dfree_fcl, static_cast<int>(dfree_ours.size()), dfree_ours.size());
+      std::printf("%-44s %-8s %-10s node pairs %.0f, triangle pairs %.0f per distance query (ours)\n", label.c_str(), pose_kind,
+                  "work", d_node_pairs / static_cast<double>(poses->size()), d_triangle_pairs / static_cast<double>(poses->size()));
     }
   }
   std::printf("\n%-36s %10s %10s %12s %12s %10s\n", "mesh", "triangles", "build_ms", "M_tri/s", "fcl_build_ms", "B/triangle");

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <limits>
 #include <map>
 
 namespace gk {
@@ -117,6 +118,31 @@ TEST(Contacts, AFinelyMeshedBoxRestingOnAPlateTouchesWhateverTheContactCount) {
   EXPECT_EQ(sunk.verdict, Verdict::kCollision) << sunk.reason;
   ASSERT_GE(sunk.first_crossing, 0);
   EXPECT_LT(static_cast<std::size_t>(sunk.first_crossing), sunk.contacts.size());
+}
+
+// The verdict does not depend on how many contacts are listed: a crossing among the first ones
+// ends the collection early (COLLISION), touches only make it collect every pair before saying
+// TOUCHING. A box sunk into the plate at one corner only (tilted), so crossings are a few among
+// thousands of coplanar touches, and the same box resting flat.
+TEST(Contacts, TheVerdictIsTheSameWhateverTheContactCap) {
+  const auto plate = bvh(fine_box(Vec3(-100, -100, -10), Vec3(100, 100, 0), 40));
+  const auto box = bvh(fine_box(Vec3(-50, -50, 0), Vec3(50, 50, 60), 40));
+  // Tilted by 2e-5 rad about its edge y = -50 and lowered 1 um: that edge 1 um below the plate's
+  // top, the opposite one 1 um above it.
+  const RigidTransform tilted = RigidTransform::from_translation(Vec3(0, -50, -1e-3)) *
+                                RigidTransform::from_axis_angle(Vec3::UnitX(), 2e-5) *
+                                RigidTransform::from_translation(Vec3(0, 50, 0));
+  for (std::size_t cap : {std::size_t{1}, std::size_t{2}, std::size_t{8}, std::size_t{32}, std::size_t{2000},
+                          std::numeric_limits<std::size_t>::max()}) {
+    VerdictOptions options;
+    options.max_contacts = cap;
+    const VerdictResult rest = assess(*plate, {}, *box, {}, options).value();
+    EXPECT_EQ(rest.verdict, Verdict::kTouching) << "cap " << cap << ": " << rest.reason;
+    const VerdictResult sunk = assess(*plate, {}, *box, tilted, options).value();
+    EXPECT_EQ(sunk.verdict, Verdict::kCollision) << "cap " << cap << ": " << sunk.reason;
+    ASSERT_GE(sunk.first_crossing, 0) << "cap " << cap;
+    EXPECT_LE(sunk.contacts.size(), cap);
+  }
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 namespace gk {
 namespace {
@@ -102,6 +103,47 @@ TEST(MeshQueriesBruteForce, ThresholdQueryAndPairsWithinDelta) {
       EXPECT_EQ(got_set, within) << "round " << round << " delta " << delta;
     }
   }
+}
+
+// A box's few large triangles against a dense mesh driven into it, across them or just beside
+// them: the traversal drops a leaf-node pair when each leaf triangle is apart from the node's box
+// along its own normal; every contact pair must survive that, at factory offsets too, and the
+// distance of the poses that do not touch must be the all-pairs minimum.
+TEST(MeshQueriesBruteForce, ADenseMeshDrivenIntoLargeFlatTrianglesKeepsEveryContact) {
+  Rng rng(77);
+  int colliding = 0, apart = 0;
+  for (int leaf_box : {1, 4, 7}) {
+    for (int leaf_blob : {1, 4}) {
+      const auto box = MeshBvh::build(testing::share(testing::box_mesh(Vec3(-450, -40, 0), Vec3(450, 40, 90))), {leaf_box}).value();
+      const auto blob =
+          MeshBvh::build(testing::share(testing::random_closed_blob(rng, 3, 30.0, 0.3, Vec3::Zero())), {leaf_blob}).value();
+      for (double offset : {0.0, 25000.0, 1.0e6}) {
+        for (int k = 0; k < 12; ++k) {
+          const RigidTransform place = RigidTransform::from_translation(Vec3(offset, -offset, 0.5 * offset));
+          // The blob's centre near one of the box's faces (inside, across or outside it).
+          const RigidTransform turn = testing::random_pose(rng, 0.0);
+          const Vec3 at(std::uniform_real_distribution<double>(-480, 480)(rng), std::uniform_real_distribution<double>(-75, 75)(rng),
+                        std::uniform_real_distribution<double>(-35, 125)(rng));
+          const RigidTransform pose_b = place * RigidTransform{turn.rotation, at};
+          const PairSet truth = testing::brute_force_contacts(box->mesh(), place, blob->mesh(), pose_b);
+          CollisionRequest all;
+          all.all_contacts = true;
+          const CollisionResult got = collide(*box, place, *blob, pose_b, all).value();
+          EXPECT_EQ(as_set(got), truth) << "leaves " << leaf_box << "/" << leaf_blob << " offset " << offset << " pose " << k;
+          if (truth.empty()) {
+            ++apart;
+            const double d = distance(*box, place, *blob, pose_b).value().distance_mm;
+            const double expected = testing::brute_force_distance(box->mesh(), place, blob->mesh(), pose_b);
+            EXPECT_NEAR(d, expected, 1e-9 * std::max(1.0, offset)) << "offset " << offset << " pose " << k;
+          } else {
+            ++colliding;
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(colliding, 40);
+  EXPECT_GT(apart, 40);
 }
 
 TEST(MeshQueriesBruteForce, BadPosesAndRequestsAreErrorsNamingTheField) {
