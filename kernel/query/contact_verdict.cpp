@@ -179,11 +179,11 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
   };
   classify(collided.value());
   // One crossing pair among those listed makes the pair a COLLISION whatever the rest are. When
-  // none crosses but the list is cut short, touching or crossing is decided over every pair
-  // (thousands of coplanar pairs where a finely meshed box rests on a plate): the cap applies
-  // only to what is reported.
+  // none crosses but the list is cut short, the verdict is decided over every pair (thousands of
+  // coplanar pairs where a finely meshed box rests on a plate; open meshes whose first pairs are
+  // all on zero-area triangles): the cap applies only to what is reported.
   bool crossings_counted_in_full = !collided.value().truncated;
-  if (oriented && collided.value().truncated && out.crossing_pairs == 0) {
+  if (collided.value().truncated && out.crossing_pairs == 0) {
     creq.max_contacts = std::numeric_limits<std::size_t>::max();
     collided = collide(a, pose_a, b, pose_b, creq);
     if (!collided.ok()) return collided.error();
@@ -217,10 +217,6 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
       out.verdict = Verdict::kInconclusive;
       out.inconclusive_reason = InconclusiveReason::kDegenerateTriangles;
       out.reason = "contact decided on zero-area triangles only";
-    } else if (col.truncated) {  // open meshes only: the listed pairs were all degenerate
-      out.verdict = Verdict::kInconclusive;
-      out.inconclusive_reason = InconclusiveReason::kDegenerateTriangles;
-      out.reason = "contact list truncated before every pair was classified";
     } else {
       out.verdict = Verdict::kTouching;
       out.reason = "surfaces touch from outside without crossing";

@@ -133,7 +133,12 @@ class MeshPairFrame {
     const double scale = std::max({ra.min.cwiseAbs().maxCoeff(), ra.max.cwiseAbs().maxCoeff(),
                                    b_in_a_.translation.cwiseAbs().maxCoeff() + rb.min.cwiseAbs().maxCoeff() +
                                        rb.max.cwiseAbs().maxCoeff(), 1.0});
-    slack_ = tolerances::kBoxSlackRelative * scale;
+    // A pose's rotation is accepted within kRotationOrthonormality of orthonormal (a rotation
+    // written with 9 decimals), while the node tests assume an orthonormal R (a transpose for the
+    // inverse, unit axes): their error is then about |R^T R - I| times the coordinates, which the
+    // slack must cover as well, or a box lands beside where its triangles are.
+    const double off_orthonormal = (b_in_a_.rotation.transpose() * b_in_a_.rotation - Mat3::Identity()).cwiseAbs().maxCoeff();
+    slack_ = (tolerances::kBoxSlackRelative + 16.0 * off_orthonormal) * scale;
   }
 
   // Every triangle of `leaf` (of `leaf_mesh`) is apart from `box`, a node of the other mesh whose

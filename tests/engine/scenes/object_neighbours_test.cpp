@@ -333,6 +333,59 @@ TEST(ObjectNeighbours, TwoObjectsMovedTogetherToOnePlaceAreNeverBothToldClear) {
   EXPECT_EQ(both_clear, 0);
 }
 
+// The same race through two drag streams, each with its warm session: a drag frame is answered
+// while its pose is being stored, and that early answer may only be kept when the store shows no
+// other edit came between. Each round, both streams first drag their object along its own lane
+// (so each session reflects the scene and answers ahead), then both drag it to the same place.
+TEST(ObjectNeighbours, TwoObjectsDraggedTogetherToOnePlaceAreNeverBothToldClear) {
+  Stores stores("drag-together");
+  Engine& engine = stores.engine();
+  testing::Rng rng(5);
+  const std::string dense = stores.upload(testing::random_closed_blob(rng, 5, 60.0, 0.05, Vec3::Zero()), "dense");
+  const std::string box = stores.upload(testing::box_mesh(Vec3(0, 0, 0), Vec3(10, 10, 10)), "box");
+  auto scene = engine.create_scene("drag-together").value();
+  SceneObjectRecord neighbour, x, y;
+  neighbour.id = "neighbour";
+  neighbour.part_id = dense;
+  neighbour.pose.translation = Vec3(-68.0, 5.0, 5.0);
+  x.id = "x";
+  x.part_id = box;
+  x.pose.translation = Vec3(1000, 0, 0);
+  y = x;
+  y.id = "y";
+  y.pose.translation = Vec3(-1000, 0, 0);
+  ASSERT_TRUE(engine.put_objects(scene.id, {neighbour, x, y}).ok());
+  DragSession drag_x, drag_y;
+  int both_clear = 0, told = 0;
+  const int rounds = testing::samples(60);
+  for (int round = 0; round < rounds; ++round) {
+    std::atomic<int> ready{0};
+    Verdict vx = Verdict::kClear, vy = Verdict::kClear;
+    const auto go = [&](const std::string& id, DragSession* drag, double lane, Verdict* verdict) {
+      for (int f = 0; f < 4; ++f) {  // along its own lane, far from everything
+        StoredPose away;
+        away.translation = Vec3(lane, 300.0 + 20.0 * f, 0);
+        ASSERT_TRUE(engine.move_object(scene.id, id, away, 50.0, drag).ok());
+      }
+      ++ready;
+      while (ready.load() < 2) {
+      }
+      auto got = engine.move_object(scene.id, id, StoredPose{}, 50.0, drag);
+      ASSERT_TRUE(got.ok()) << got.error().to_string();
+      *verdict = Verdict::kClear;
+      for (const ObjectContactResult& c : got.value().contacts)
+        if (c.other == (id == "x" ? "y" : "x")) *verdict = c.verdict;
+    };
+    std::thread a(go, "x", &drag_x, 1000.0, &vx), b(go, "y", &drag_y, -1000.0, &vy);
+    a.join();
+    b.join();
+    if (vx == Verdict::kClear && vy == Verdict::kClear) ++both_clear;
+    if (vx != Verdict::kClear || vy != Verdict::kClear) ++told;
+  }
+  EXPECT_EQ(both_clear, 0);
+  EXPECT_EQ(told, rounds);
+}
+
 // A move racing a put that replaces the same object's part: what is stored is what some answer
 // described (a move's pose once landed on a part nobody had checked there).
 TEST(ObjectNeighbours, AMoveRacingAPartReplacementLeavesAStateThatWasAnswered) {

@@ -145,5 +145,40 @@ TEST(Contacts, TheVerdictIsTheSameWhateverTheContactCap) {
   }
 }
 
+// Open meshes: any contact on proper triangles is a collision. When the first contacts listed
+// are all on zero-area triangles, the verdict must still come from every pair, not from the cap
+// (it once said INCONCLUSIVE at caps 1 and 3, COLLISION uncapped).
+TEST(Contacts, OpenMeshesWhoseFirstContactsAreDegenerateStillCollideAtAnyCap) {
+  // A: one proper triangle crossing B, after it (in the mesh's order) zero-area triangles lying
+  // across B too, so a capped search may list those first.
+  std::vector<Vec3> va;
+  std::vector<TriangleMesh::Face> fa;
+  for (int k = 0; k < 6; ++k) {  // degenerate: three collinear points crossing the plane z = 0
+    const double x = -20.0 + 5.0 * k;
+    const auto base = static_cast<std::uint32_t>(va.size());
+    va.push_back(Vec3(x, 0, -1));
+    va.push_back(Vec3(x, 0, 0.5));
+    va.push_back(Vec3(x, 0, 1));
+    fa.push_back({base, base + 1, base + 2});
+  }
+  const auto base = static_cast<std::uint32_t>(va.size());
+  va.push_back(Vec3(20, -1, -1));
+  va.push_back(Vec3(20, 1, -1));
+  va.push_back(Vec3(20, 0, 1));
+  fa.push_back({base, base + 1, base + 2});
+  auto a = TriangleMesh::create(va, fa);
+  ASSERT_TRUE(a.ok()) << a.error().to_string();
+  auto b = TriangleMesh::create({Vec3(-50, -50, 0), Vec3(50, -50, 0), Vec3(0, 50, 0)}, {{0, 1, 2}});
+  ASSERT_TRUE(b.ok());
+  const auto ma = bvh(std::move(a).value());
+  const auto mb = bvh(std::move(b).value());
+  for (std::size_t cap : {std::size_t{1}, std::size_t{3}, std::size_t{10000}}) {
+    VerdictOptions options;
+    options.max_contacts = cap;
+    const VerdictResult v = assess(*ma, {}, *mb, {}, options).value();
+    EXPECT_EQ(v.verdict, Verdict::kCollision) << "cap " << cap << ": " << v.reason;
+  }
+}
+
 }  // namespace
 }  // namespace gk

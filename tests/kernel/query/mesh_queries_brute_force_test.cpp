@@ -146,6 +146,52 @@ TEST(MeshQueriesBruteForce, ADenseMeshDrivenIntoLargeFlatTrianglesKeepsEveryCont
   EXPECT_GT(apart, 40);
 }
 
+// A pose's rotation is accepted within 1e-9 of orthonormal (written with 9 decimals, say). The
+// node tests assume an orthonormal rotation, so at factory coordinates their error (1e-9 of 10^7
+// mm) once put boxes beside their triangles: crossings of a few micrometres were missed and a
+// piercing pair came out CLEAR. A box far out on a random diagonal, one large triangle cutting
+// into it by 1 nm to 10 um, the triangle's pose a rotation rounded to 9..11 decimals.
+TEST(MeshQueriesBruteForce, RotationsRoundedToNineDecimalsKeepEveryContactAtFactoryCoordinates) {
+  Rng rng(909);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int accepted = 0, crossing = 0;
+  for (int digits : {9, 10, 11}) {
+    for (int t = 0; t < 120; ++t) {
+      Mat3 r = testing::random_pose(rng, 0.0).rotation;
+      const double scale = std::pow(10.0, digits);
+      for (int i = 0; i < 9; ++i) r.data()[i] = std::round(r.data()[i] * scale) / scale;
+      const RigidTransform pose_b{r, Vec3::Zero()};
+      if (!pose_b.is_rigid()) continue;
+      ++accepted;
+      const Vec3 direction(unit(rng) < 0.5 ? -1 : 1, unit(rng) < 0.5 ? -1 : 1, unit(rng) < 0.5 ? -1 : 1);
+      const Vec3 lo = (direction * std::round(3e6 + 2.5e6 * unit(rng))).array().round();  // rotated, still within 1e7
+      const auto box = MeshBvh::build(testing::share(testing::box_mesh(lo, lo + Vec3(10, 10, 10)))).value();
+      const double depth = std::pow(10.0, -6.0 + 4.0 * unit(rng));
+      const bool bottom = unit(rng) < 0.5;
+      Vec3 c = lo + Vec3(5, 5, 0);
+      c.z() = bottom ? lo.z() + depth : lo.z() + 10.0 - depth;
+      // The triangle's vertices in its own frame, so that pose_b puts them where wanted.
+      const Mat3 inverse = r.inverse();
+      auto triangle = TriangleMesh::create({inverse * (c + Vec3(-100, -100, 0)), inverse * (c + Vec3(100, -100, 0)),
+                                            inverse * (c + Vec3(0, 100, 0))},
+                                           {{0, 1, 2}});
+      ASSERT_TRUE(triangle.ok());
+      const auto plane = MeshBvh::build(testing::share(std::move(triangle).value())).value();
+      const PairSet truth = testing::brute_force_contacts(box->mesh(), {}, plane->mesh(), pose_b);
+      CollisionRequest all;
+      all.all_contacts = true;
+      const CollisionResult got = collide(*box, {}, *plane, pose_b, all).value();
+      EXPECT_EQ(as_set(got), truth) << digits << " decimals, trial " << t << ", depth " << depth;
+      if (!truth.empty()) ++crossing;
+      const double d = distance(*box, {}, *plane, pose_b).value().distance_mm;
+      EXPECT_NEAR(d, testing::brute_force_distance(box->mesh(), {}, plane->mesh(), pose_b), 1e-9)
+          << digits << " decimals, trial " << t;
+    }
+  }
+  EXPECT_GT(accepted, 150);
+  EXPECT_GT(crossing, 100);
+}
+
 TEST(MeshQueriesBruteForce, BadPosesAndRequestsAreErrorsNamingTheField) {
   Rng rng(5);
   const Scenario s = make_scenario(rng, 0);
