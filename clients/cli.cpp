@@ -15,10 +15,11 @@
 //   gatekeeper-cli move-object '{"sceneId": "...", "objectId": "...", "pose": {...}}'
 //   gatekeeper-cli drag < moves.jsonl                (one MoveObjectRequest JSON per line)
 //   gatekeeper-cli start-audit '{"sceneId": "...", "clearanceMm": 10, "rules": [...]}' | watch-audit JOB | cancel-audit JOB
-//   gatekeeper-cli audit-report JOB [--html report.html]
+//   gatekeeper-cli audit-report JOB [--html report.html] [--bcf clashes.bcfzip]
 // Exit status: 0 on OK, 1 on an RPC error (printed as JSON with its code), 2 on bad usage.
 #include "clients/channel_options.h"
 #include "clients/gatekeeper_client/audit_report.h"
+#include "clients/gatekeeper_client/bcf_export.h"
 #include "clients/gatekeeper_client/upload.h"
 #include "gatekeeper/v1/gatekeeper.grpc.pb.h"
 
@@ -118,6 +119,9 @@ int main(int argc, char** argv) {
   audit_report->add_option("job", id)->required();
   std::string html_file;
   audit_report->add_option("--html", html_file, "also write the report page (3D view, sortable clash table) to this file");
+  std::string bcf_file;
+  audit_report->add_option("--bcf", bcf_file,
+                           "also write the clashes as BCF 2.1 (one topic and viewpoint per clash) to this .bcfzip file");
   CLI11_PARSE(app, argc, argv);
 
   grpc::ChannelArguments channel_args;
@@ -270,6 +274,19 @@ int main(int argc, char** argv) {
   if (*audit_report) {
     pb::AuditReport reply;
     const grpc::Status status = gk::client::read_audit_report(*stub, id, &reply);
+    if (status.ok() && !bcf_file.empty()) {
+      std::string archive, error;
+      if (!gk::client::write_bcf(reply, {}, &archive, &error)) {
+        std::fprintf(stderr, "--bcf: %s\n", error.c_str());
+        return 1;
+      }
+      std::ofstream out(bcf_file, std::ios::binary);
+      out << archive;
+      if (!out) {
+        std::fprintf(stderr, "--bcf: cannot write %s\n", bcf_file.c_str());
+        return 1;
+      }
+    }
     if (status.ok() && !html_file.empty()) {
       pb::GetAuditReportRequest request;
       request.set_job_id(id);

@@ -42,6 +42,8 @@ PACKAGES=(
   libcoarrays-dev
   # python clients: grpcio/protobuf at run time; pip, setuptools and wheel install clients/python offline
   python3 python3-grpcio python3-protobuf python3-pip python3-setuptools python3-wheel python3-venv
+  # the BCF export test validates the exported XML against buildingSMART's schemas with xmllint
+  libxml2-utils
   # the audit report page: three.js from npm, checked in headless Chromium
   # (npm too: Debian packages it apart from nodejs; NodeSource's nodejs includes it and conflicts
   # with Debian's npm, so it is installed below only when the command is missing)

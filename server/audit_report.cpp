@@ -2,6 +2,7 @@
 
 #include "engine/audits/audit_request.h"
 #include "engine/audits/clash_groups.h"
+#include "engine/audits/clash_id.h"
 #include "server/proto_convert.h"
 
 #include <algorithm>
@@ -65,6 +66,7 @@ void report_to_proto(const AuditSnapshot& snapshot, pb::AuditReport* out, std::s
     pb::Clash* p = out->add_clashes();
     p->set_object_a(r.a);
     p->set_object_b(r.b);
+    p->set_clash_id(engine::clash_id(r.a, r.b));
     p->set_name_a(r.name_a);
     p->set_name_b(r.name_b);
     p->set_category_a(r.category_a);

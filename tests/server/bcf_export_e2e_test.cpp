@@ -1,0 +1,143 @@
+// The audit's clashes as BCF 2.1 through what a user runs: the real daemon audits a scene, the
+// real gatekeeper-cli writes the .bcfzip, Python's zipfile checks every entry's CRC and unpacks it,
+// and xmllint validates every file against buildingSMART's own schemas (tests/data/bcf-2.1).
+#include "clients/gatekeeper_client/bcf_export.h"
+#include "tests/server/daemon_fixture.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <set>
+#include <string>
+
+namespace gk {
+namespace {
+
+namespace pb = ::gatekeeper::v1;
+using testing::Daemon;
+
+std::string run(const std::string& command) {
+  std::string out;
+  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) return out;
+  char buffer[4096];
+  while (std::size_t n = fread(buffer, 1, sizeof buffer, pipe)) out.append(buffer, n);
+  pclose(pipe);
+  return out;
+}
+
+std::string put(pb::Gatekeeper::Stub& stub, const std::string& scene, const std::string& name, const std::string& category,
+                const std::string& part, double x, double y, double z) {
+  grpc::ClientContext ctx;
+  pb::PutObjectRequest request;
+  request.set_scene_id(scene);
+  request.mutable_object()->set_name(name);
+  request.mutable_object()->set_category(category);
+  request.mutable_object()->set_part_id(part);
+  request.mutable_object()->mutable_pose()->mutable_translation()->set_x_mm(x);
+  request.mutable_object()->mutable_pose()->mutable_translation()->set_y_mm(y);
+  request.mutable_object()->mutable_pose()->mutable_translation()->set_z_mm(z);
+  pb::MoveResult moved;
+  EXPECT_TRUE(stub.PutObject(&ctx, request, &moved).ok());
+  return moved.object_id();
+}
+
+// Exports the job's report with the CLI, checks the archive and every file against the schemas;
+// returns the topic Guid of each (object_a, object_b) pair as the markup files name them.
+std::map<std::pair<std::string, std::string>, std::string> export_and_validate(const Daemon& daemon, const std::string& job,
+                                                                               const std::string& tag, std::size_t clashes) {
+  const std::string dir = testing::temp_dir(tag);
+  const std::string file = dir + "/clashes.bcfzip";
+  const std::string cli = run(std::string(GATEKEEPER_CLI_PATH) + " --address " + daemon.address() + " audit-report " + job +
+                              " --bcf " + file + " > /dev/null");
+  EXPECT_TRUE(std::filesystem::exists(file)) << cli;
+  // Every entry's CRC, then the files.
+  const std::string tested = run("python3 -m zipfile -t " + file);
+  EXPECT_NE(tested.find("Done testing"), std::string::npos) << tested;
+  EXPECT_EQ(tested.find("corrupted"), std::string::npos) << tested;
+  EXPECT_EQ(run("python3 -m zipfile -e " + file + " " + dir + "/unzipped"), "");
+  const std::string schemas = GATEKEEPER_BCF_SCHEMAS;
+  const std::string root = dir + "/unzipped";
+  EXPECT_NE(run("xmllint --noout --schema " + schemas + "/version.xsd " + root + "/bcf.version").find("validates"),
+            std::string::npos);
+  std::map<std::pair<std::string, std::string>, std::string> guids;
+  std::size_t topics = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(root)) {
+    if (!entry.is_directory()) continue;
+    ++topics;
+    const std::string topic = entry.path().string();
+    const std::string markup = run("xmllint --noout --schema " + schemas + "/markup.xsd " + topic + "/markup.bcf");
+    EXPECT_NE(markup.find("validates"), std::string::npos) << markup;
+    const std::string view = run("xmllint --noout --schema " + schemas + "/visinfo.xsd " + topic + "/viewpoint.bcfv");
+    EXPECT_NE(view.find("validates"), std::string::npos) << view;
+    // The folder is the topic's Guid; the viewpoint selects both objects by their ids.
+    const std::string text = testing::read_file(topic + "/markup.bcf");
+    EXPECT_NE(text.find("Guid=\"" + entry.path().filename().string() + "\""), std::string::npos);
+    const std::string viewpoint = testing::read_file(topic + "/viewpoint.bcfv");
+    std::vector<std::string> ids;
+    const std::regex tool_id("<AuthoringToolId>([^<]*)</AuthoringToolId>");
+    for (auto it = std::sregex_iterator(viewpoint.begin(), viewpoint.end(), tool_id); it != std::sregex_iterator(); ++it)
+      ids.push_back((*it)[1]);
+    EXPECT_EQ(ids.size(), 2u);
+    if (ids.size() == 2) guids[{ids[0], ids[1]}] = entry.path().filename().string();
+  }
+  EXPECT_EQ(topics, clashes);
+  return guids;
+}
+
+TEST(BcfExportE2E, AnAuditsClashesExportAsBcfThatBuildingSmartsSchemasAcceptWithGuidsStableAcrossAudits) {
+  Daemon daemon(testing::temp_dir("bcf"));
+  auto stub = daemon.stub();
+  const std::string column = testing::upload_part_id(*stub, testing::box_obj(0, 0, 0, 400, 400, 8000), "obj");
+  const std::string pipe = testing::upload_part_id(*stub, testing::box_obj(0, 0, 0, 30000, 200, 200), "obj");
+  const std::string crate = testing::upload_part_id(*stub, testing::box_obj(0, 0, 0, 1000, 1000, 1000), "obj");
+  grpc::ClientContext cctx;
+  pb::CreateSceneRequest create;
+  create.set_name("hall");
+  pb::SceneInfo scene;
+  ASSERT_TRUE(stub->CreateScene(&cctx, create, &scene).ok());
+  for (int i = 0; i < 4; ++i) put(*stub, scene.scene_id(), "column <" + std::to_string(i) + ">", "column", column, i * 8000.0, 0, 0);
+  put(*stub, scene.scene_id(), "pipe & \"duct\"", "pipe", pipe, -1000, 100, 3000);  // crosses every column
+  put(*stub, scene.scene_id(), "crate-a", "crate", crate, 2000, 3000, 0);
+  put(*stub, scene.scene_id(), "crate-b", "crate", crate, 2995, 3000, 0);  // 5 mm into crate-a
+  put(*stub, scene.scene_id(), "crate-c", "crate", crate, 4002, 3000, 0);  // 7 mm from crate-b
+  pb::StartAuditRequest start;
+  start.set_scene_id(scene.scene_id());
+  start.set_clearance_mm(10.0);
+  const pb::AuditReport first = testing::run_audit(*stub, start, false);
+  ASSERT_EQ(first.progress().state(), pb::DONE);
+  ASSERT_EQ(first.clashes_size(), 6);
+  std::set<std::string> ids;
+  for (const pb::Clash& c : first.clashes()) ids.insert(c.clash_id());
+  EXPECT_EQ(ids.size(), 6u);
+
+  const auto exported = export_and_validate(daemon, first.progress().job_id(), "bcf-first", 6);
+  for (const pb::Clash& c : first.clashes()) {
+    const auto it = exported.find({c.object_a(), c.object_b()});
+    ASSERT_NE(it, exported.end()) << c.object_a() << " / " << c.object_b();
+    EXPECT_EQ(it->second, c.clash_id());
+  }
+  // A second audit of the same scene: the same pairs, the same topic Guids.
+  const pb::AuditReport second = testing::run_audit(*stub, start, false);
+  ASSERT_EQ(second.clashes_size(), 6);
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(second.clashes(i).clash_id(), first.clashes(i).clash_id());
+  EXPECT_EQ(export_and_validate(daemon, second.progress().job_id(), "bcf-second", 6), exported);
+}
+
+// A report without clash ids (an older daemon's) is refused rather than written with made-up Guids.
+TEST(BcfExport, AReportWithoutClashIdsIsRefused) {
+  pb::AuditReport report;
+  pb::Clash* c = report.add_clashes();
+  c->set_object_a("a");
+  c->set_object_b("b");
+  std::string archive, error;
+  EXPECT_FALSE(client::write_bcf(report, {}, &archive, &error));
+  EXPECT_NE(error.find("clash_id"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace gk
