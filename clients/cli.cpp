@@ -16,6 +16,7 @@
 //   gatekeeper-cli drag < moves.jsonl                (one MoveObjectRequest JSON per line)
 //   gatekeeper-cli start-audit '{"sceneId": "...", "clearanceMm": 10, "rules": [...]}' | watch-audit JOB | cancel-audit JOB
 //   gatekeeper-cli audit-report JOB [--html report.html] [--bcf clashes.bcfzip]
+//   gatekeeper-cli set-clash-status '{"sceneId": "...", "clashId": "...", "status": "CLASH_REVIEWED"}' | clash-statuses SCENE
 // Exit status: 0 on OK, 1 on an RPC error (printed as JSON with its code), 2 on bad usage.
 #include "clients/channel_options.h"
 #include "clients/gatekeeper_client/audit_report.h"
@@ -115,6 +116,10 @@ int main(int argc, char** argv) {
   watch_audit->add_option("job", id)->required();
   auto* cancel_audit = app.add_subcommand("cancel-audit", "cancel an audit (its results so far are kept)");
   cancel_audit->add_option("job", id)->required();
+  auto* set_clash_status = app.add_subcommand("set-clash-status", "SetClashStatusRequest JSON (a clash's review status)");
+  set_clash_status->add_option("json", json)->required();
+  auto* clash_statuses = app.add_subcommand("clash-statuses", "every clash's review status in a scene");
+  clash_statuses->add_option("scene", id)->required();
   auto* audit_report = app.add_subcommand("audit-report", "an audit's progress and clashes");
   audit_report->add_option("job", id)->required();
   std::string html_file;
@@ -270,6 +275,18 @@ int main(int argc, char** argv) {
     request.set_job_id(id);
     pb::AuditProgress reply;
     return print_reply(stub->CancelAudit(&ctx, request, &reply), reply);
+  }
+  if (*set_clash_status) {
+    pb::SetClashStatusRequest request;
+    if (!parse(json, &request)) return 2;
+    pb::ClashStatusInfo reply;
+    return print_reply(stub->SetClashStatus(&ctx, request, &reply), reply);
+  }
+  if (*clash_statuses) {
+    pb::ListClashStatusesRequest request;
+    request.set_scene_id(id);
+    pb::ListClashStatusesResponse reply;
+    return print_reply(stub->ListClashStatuses(&ctx, request, &reply), reply);
   }
   if (*audit_report) {
     pb::AuditReport reply;

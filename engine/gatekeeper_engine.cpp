@@ -20,9 +20,9 @@ Result<bool> check_clearance(double clearance_mm) {
 }  // namespace
 
 Engine::Engine(MachineRegistry& machines, PartRegistry& parts, SceneStore& scenes, EndedAudits* archive, EngineOptions options,
-               AuditCheckpoints* checkpoints)
+               AuditCheckpoints* checkpoints, ClashStatuses* statuses)
     : machines_(machines), parts_(parts), scenes_(scenes), options_(options), steps_(machines, parts, options.step_answers_kept),
-      audits_(parts, archive, options.audits, checkpoints) {}
+      audits_(parts, archive, options.audits, checkpoints, statuses), statuses_(statuses) {}
 
 Result<ClearanceResult> Engine::clearance(const ClearanceRequest& request, const StopToken& stop) {
   return clearance_query(request, parts_, scenes_, stop);
@@ -163,6 +163,18 @@ Result<std::string> Engine::start_audit(const std::string& scene_id, const Audit
   auto scene = scenes_.get(scene_id);
   if (!scene.ok()) return scene.error();
   return audits_.start(scene.value(), options.value(), baseline_job_id);
+}
+
+Result<ClashStatusRecord> Engine::set_clash_status(const std::string& scene_id, const std::string& clash_id, ClashStatus status) {
+  if (!statuses_) return Error{ErrorCode::kFailedPrecondition, "clash_id", "this daemon keeps no clash statuses"};
+  if (auto scene = scenes_.version(scene_id); !scene.ok()) return scene.error();
+  return statuses_->set(scene_id, clash_id, status);
+}
+
+Result<std::vector<ClashStatusRecord>> Engine::clash_statuses(const std::string& scene_id) const {
+  if (auto scene = scenes_.version(scene_id); !scene.ok()) return scene.error();
+  if (!statuses_) return std::vector<ClashStatusRecord>{};
+  return statuses_->list(scene_id);
 }
 
 }  // namespace gk::engine

@@ -38,8 +38,9 @@ class Engine {
  public:
   // archive may be null: ended audits then live in memory only. checkpoints may be null: a
   // running audit is then lost when the daemon stops (with them it resumes: resume_audits()).
+  // statuses may be null: clashes then keep no review status (SetClashStatus is refused).
   Engine(MachineRegistry& machines, PartRegistry& parts, SceneStore& scenes, EndedAudits* archive, EngineOptions options = {},
-         AuditCheckpoints* checkpoints = nullptr);
+         AuditCheckpoints* checkpoints = nullptr, ClashStatuses* statuses = nullptr);
 
   // --- ValidateStep
   StepAnswers& steps() { return steps_; }
@@ -82,6 +83,10 @@ class Engine {
   AuditJobs& audits() { return audits_; }
   // A client's cancel (kept across a restart).
   Result<std::shared_ptr<AuditJob>> cancel_audit(const std::string& job_id) { return audits_.cancel(job_id); }
+  // A clash's review status, set by a user (the scene and a clash an audit of it found), and
+  // every clash's status in the scene.
+  Result<ClashStatusRecord> set_clash_status(const std::string& scene_id, const std::string& clash_id, ClashStatus status);
+  Result<std::vector<ClashStatusRecord>> clash_statuses(const std::string& scene_id) const;
   // Queues the audits a stopped or killed daemon left unfinished; returns how many.
   std::size_t resume_audits() { return audits_.resume_unfinished(); }
 
@@ -108,6 +113,7 @@ class Engine {
   EngineOptions options_;
   StepAnswers steps_;
   AuditJobs audits_;
+  ClashStatuses* statuses_;
 };
 
 }  // namespace gk::engine

@@ -177,4 +177,50 @@ AuditSnapshot snapshot_from_report(const pb::AuditReport& report) {
   return s;
 }
 
+namespace {
+
+pb::ClashStatus to_proto(engine::ClashStatus s) {
+  switch (s) {
+    case engine::ClashStatus::kNew: return pb::CLASH_NEW;
+    case engine::ClashStatus::kActive: return pb::CLASH_ACTIVE;
+    case engine::ClashStatus::kReviewed: return pb::CLASH_REVIEWED;
+    case engine::ClashStatus::kApproved: return pb::CLASH_APPROVED;
+    case engine::ClashStatus::kResolved: return pb::CLASH_RESOLVED;
+  }
+  return pb::CLASH_ACTIVE;
+}
+
+}  // namespace
+
+void add_clash_statuses(const std::vector<engine::ClashStatusRecord>& statuses, pb::AuditReport* report) {
+  std::map<std::string, engine::ClashStatus> by_id;
+  for (const engine::ClashStatusRecord& r : statuses) by_id[r.clash_id] = r.status;
+  for (pb::Clash& c : *report->mutable_clashes()) {
+    const auto it = by_id.find(c.clash_id());
+    c.set_status(it == by_id.end() ? pb::CLASH_NEW : to_proto(it->second));
+  }
+}
+
+void status_to_proto(const engine::ClashStatusRecord& r, pb::ClashStatusInfo* out) {
+  out->set_scene_id(r.scene_id);
+  out->set_clash_id(r.clash_id);
+  out->set_object_a(r.object_a);
+  out->set_object_b(r.object_b);
+  out->set_status(to_proto(r.status));
+  out->set_set_by_user(r.set_by_user);
+  out->set_first_job_id(r.first_job_id);
+  out->set_last_job_id(r.last_job_id);
+}
+
+Result<engine::ClashStatus> clash_status_from_proto(pb::ClashStatus status) {
+  switch (status) {
+    case pb::CLASH_ACTIVE: return engine::ClashStatus::kActive;
+    case pb::CLASH_REVIEWED: return engine::ClashStatus::kReviewed;
+    case pb::CLASH_APPROVED: return engine::ClashStatus::kApproved;
+    case pb::CLASH_RESOLVED: return engine::ClashStatus::kResolved;
+    default:
+      return invalid_argument("status", "must be CLASH_REVIEWED, CLASH_APPROVED, CLASH_ACTIVE or CLASH_RESOLVED (NEW is the audits' own)");
+  }
+}
+
 }  // namespace gk::server

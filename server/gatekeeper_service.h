@@ -105,6 +105,10 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
                                         pb::AuditProgress* response) override;
   grpc::ServerUnaryReactor* GetAuditReport(grpc::CallbackServerContext* ctx, const pb::GetAuditReportRequest* request,
                                            pb::AuditReport* response) override;
+  grpc::ServerUnaryReactor* SetClashStatus(grpc::CallbackServerContext* ctx, const pb::SetClashStatusRequest* request,
+                                           pb::ClashStatusInfo* response) override;
+  grpc::ServerUnaryReactor* ListClashStatuses(grpc::CallbackServerContext* ctx, const pb::ListClashStatusesRequest* request,
+                                              pb::ListClashStatusesResponse* response) override;
   grpc::ServerUnaryReactor* GetServerInfo(grpc::CallbackServerContext* ctx, const pb::GetServerInfoRequest* request,
                                           pb::ServerInfo* response) override;
 

@@ -24,6 +24,7 @@
 #include "server/access_control.h"
 #include "server/audit_archive.h"
 #include "server/audit_checkpoint_store.h"
+#include "server/clash_status_store.h"
 #include "server/gatekeeper_service.h"
 #include "server/metrics_endpoint.h"
 #include "server/request_log.h"
@@ -261,12 +262,17 @@ int main(int argc, char** argv) {
     spdlog::error("{}", checkpoints.error().to_string());
     return 1;
   }
+  auto clash_statuses = gk::server::ClashStatusStore::open(config.data_dir);
+  if (!clash_statuses.ok()) {
+    spdlog::error("{}", clash_statuses.error().to_string());
+    return 1;
+  }
   gk::engine::EngineOptions engine_options;
   engine_options.audit_threads = config.workers;
   engine_options.audits.concurrent = config.audit_jobs;
   engine_options.audits.ended_in_memory = static_cast<std::size_t>(config.audits_in_memory);
   gk::engine::Engine engine(*machines.value(), parts, *scenes.value(), archive.value().get(), engine_options,
-                            checkpoints.value().get());
+                            checkpoints.value().get(), clash_statuses.value().get());
   gk::server::GatekeeperService service(engine, options);
 
   grpc::EnableDefaultHealthCheckService(true);

@@ -295,6 +295,10 @@ grpc::ServerUnaryReactor* GatekeeperService::GetAuditReport(grpc::CallbackServer
     if (!page.ok()) return grpc::Status(to_status(page.error()));
     progress_to_proto(get.job_id(), snapshot, out->mutable_progress());
     report_to_proto(snapshot, out, page.value().begin, page.value().end);
+    auto statuses = engine_.clash_statuses(job.value()->scene().id);
+    // The scene may be gone since the audit: its clashes then have no kept status.
+    const std::vector<engine::ClashStatusRecord> kept = statuses.ok() ? statuses.value() : std::vector<engine::ClashStatusRecord>{};
+    add_clash_statuses(kept, out);
     out->set_clashes_total(snapshot.clashes.size());
     out->set_page_offset(page.value().begin);
     out->set_next_page_token(page.value().next_token);
@@ -303,8 +307,35 @@ grpc::ServerUnaryReactor* GatekeeperService::GetAuditReport(grpc::CallbackServer
       pb::AuditReport whole;
       progress_to_proto(get.job_id(), snapshot, whole.mutable_progress());
       report_to_proto(snapshot, &whole);
+      add_clash_statuses(kept, &whole);
       out->set_html(audit_report_page(whole, job.value()->scene().name, job.value()->objects()));
     }
+    return grpc::Status(grpc::Status::OK);
+  });
+}
+
+grpc::ServerUnaryReactor* GatekeeperService::SetClashStatus(grpc::CallbackServerContext* ctx, const pb::SetClashStatusRequest* request,
+                                                            pb::ClashStatusInfo* response) {
+  return run_queued(record_pool_, stats_, ctx, "SetClashStatus", request, response,
+                    [this, ctx](const pb::SetClashStatusRequest& set, pb::ClashStatusInfo* out) -> grpc::Status {
+    if (auto allowed = require_role(ctx, Role::kWrite); !allowed.ok()) return allowed;
+    auto status = clash_status_from_proto(set.status());
+    if (!status.ok()) return grpc::Status(to_status(status.error()));
+    auto stored = engine_.set_clash_status(set.scene_id(), set.clash_id(), status.value());
+    if (!stored.ok()) return grpc::Status(to_status(stored.error()));
+    status_to_proto(stored.value(), out);
+    return grpc::Status(grpc::Status::OK);
+  });
+}
+
+grpc::ServerUnaryReactor* GatekeeperService::ListClashStatuses(grpc::CallbackServerContext* ctx,
+                                                               const pb::ListClashStatusesRequest* request,
+                                                               pb::ListClashStatusesResponse* response) {
+  return run_queued(record_pool_, stats_, ctx, "ListClashStatuses", request, response,
+                    [this](const pb::ListClashStatusesRequest& list, pb::ListClashStatusesResponse* out) -> grpc::Status {
+    auto statuses = engine_.clash_statuses(list.scene_id());
+    if (!statuses.ok()) return grpc::Status(to_status(statuses.error()));
+    for (const engine::ClashStatusRecord& r : statuses.value()) status_to_proto(r, out->add_statuses());
     return grpc::Status(grpc::Status::OK);
   });
 }

@@ -64,6 +64,17 @@ std::string derived_guid(const std::string& guid, const char* what) {
   return text;
 }
 
+// The clash tools' words for the review statuses (a report without statuses: New).
+const char* status_word(pb::ClashStatus s) {
+  switch (s) {
+    case pb::CLASH_ACTIVE: return "Active";
+    case pb::CLASH_REVIEWED: return "Reviewed";
+    case pb::CLASH_APPROVED: return "Approved";
+    case pb::CLASH_RESOLVED: return "Resolved";
+    default: return "New";
+  }
+}
+
 const char* verdict_word(const pb::Clash& c) {
   switch (c.verdict()) {
     case pb::COLLISION: return "COLLISION";
@@ -89,7 +100,7 @@ std::string markup(const pb::Clash& c, const std::string& job, const std::string
   description += "; " + std::to_string(c.contact_pairs()) + " triangle pairs; objects " + c.object_a() + " and " + c.object_b() +
                  "; audit " + job;
   std::string out = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<Markup>\n";
-  out += "  <Topic Guid=\"" + c.clash_id() + "\" TopicType=\"Clash\" TopicStatus=\"New\">\n";
+  out += "  <Topic Guid=\"" + c.clash_id() + "\" TopicType=\"Clash\" TopicStatus=\"" + status_word(c.status()) + "\">\n";
   out += "    <Title>" + xml_text(std::string(verdict_word(c)) + ": " + a + " / " + b) + "</Title>\n";
   std::set<std::string> labels;
   for (const std::string& l : {c.category_a(), c.category_b()})

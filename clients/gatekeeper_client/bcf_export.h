@@ -1,7 +1,8 @@
 // BCF 2.1 (buildingSMART's BIM Collaboration Format: what clash tools exchange) from an audit
 // report: one topic per clash, its Guid the clash's stable id (so a re-audit's export updates the
 // same topics), titled with the verdict and both objects, described with the verdict's figures,
-// and one viewpoint that looks at the clash from a distance sized to it and selects both objects
+// TopicStatus its review status (New, Active, Reviewed, Approved, Resolved), and one viewpoint
+// that looks at the clash from a distance sized to it and selects both objects
 // by their scene object ids. BCF's coordinates are metres; the report's are millimetres.
 #pragma once
 

@@ -1,12 +1,15 @@
 #include "engine/audits/audit_jobs.h"
 
+#include "engine/audits/clash_id.h"
+
 #include <spdlog/spdlog.h>
 
 namespace gk::engine {
 
-AuditJobs::AuditJobs(PartRegistry& parts, EndedAudits* archive, Options options, AuditCheckpoints* checkpoints)
+AuditJobs::AuditJobs(PartRegistry& parts, EndedAudits* archive, Options options, AuditCheckpoints* checkpoints,
+                     ClashStatuses* statuses)
     : parts_(parts), archive_(archive), ended_in_memory_(std::max<std::size_t>(1, options.ended_in_memory)),
-      checkpoints_(archive ? checkpoints : nullptr), pool_(options.concurrent, options.queued) {}
+      checkpoints_(archive ? checkpoints : nullptr), statuses_(statuses), pool_(options.concurrent, options.queued) {}
 
 AuditJobs::~AuditJobs() {
   cancel_all();
@@ -63,6 +66,15 @@ bool AuditJobs::submit(const std::string& id, std::shared_ptr<AuditJob> job) {
       job->run(
           parts_,
           [&](const AuditSnapshot& final_state) {
+            // A finished audit found exactly these clashes: the review statuses follow (a cancelled,
+            // failed or interrupted one found only some).
+            if (statuses_ && final_state.status == AuditStatus::kDone) {
+              std::vector<FoundClash> found;
+              found.reserve(final_state.clashes.size());
+              for (const ClashRecord& c : final_state.clashes) found.push_back({clash_id(c.a, c.b), c.a, c.b});
+              auto recorded = statuses_->record_audit(job->scene().id, id, found);
+              if (!recorded.ok()) spdlog::warn("audit {}: clash statuses not updated: {}", id, recorded.error().to_string());
+            }
             if (!archive_) return;
             // Interrupted by the daemon's stop: kept for resuming, not archived as ended.
             if (checkpoints_ && job->interrupted() && final_state.status == AuditStatus::kCancelled) return;

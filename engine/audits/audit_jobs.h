@@ -2,6 +2,7 @@
 #pragma once
 
 #include "engine/audits/audit_checkpoints.h"
+#include "engine/audits/clash_statuses.h"
 #include "engine/audits/audit_job.h"
 #include "engine/audits/ended_audits.h"
 #include "engine/parts/part_registry.h"
@@ -30,7 +31,9 @@ class AuditJobs {
   };
   // archive may be null (nothing is then dropped: an ended job lives only in memory); checkpoints
   // may be null (a running job is then lost when the daemon stops).
-  AuditJobs(PartRegistry& parts, EndedAudits* archive, Options options, AuditCheckpoints* checkpoints = nullptr);
+  // statuses may be null: clashes then have no review status kept across audits.
+  AuditJobs(PartRegistry& parts, EndedAudits* archive, Options options, AuditCheckpoints* checkpoints = nullptr,
+            ClashStatuses* statuses = nullptr);
   ~AuditJobs();
 
   // A new audit of `scene` with `options`, or a re-audit against the finished job baseline_id
@@ -66,6 +69,7 @@ class AuditJobs {
   EndedAudits* archive_;
   const std::size_t ended_in_memory_;
   AuditCheckpoints* checkpoints_;
+  ClashStatuses* statuses_;
   mutable std::mutex mutex_;
   std::map<std::string, std::shared_ptr<AuditJob>> jobs_;
   std::list<std::string> ended_;  // archived jobs in memory, least recently read first

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <regex>
 #include <set>
 #include <string>
@@ -126,6 +127,146 @@ TEST(BcfExportE2E, AnAuditsClashesExportAsBcfThatBuildingSmartsSchemasAcceptWith
   ASSERT_EQ(second.clashes_size(), 6);
   for (int i = 0; i < 6; ++i) EXPECT_EQ(second.clashes(i).clash_id(), first.clashes(i).clash_id());
   EXPECT_EQ(export_and_validate(daemon, second.progress().job_id(), "bcf-second", 6), exported);
+}
+
+pb::ClashStatus status_in(const pb::AuditReport& report, const std::string& clash_id) {
+  for (const pb::Clash& c : report.clashes())
+    if (c.clash_id() == clash_id) return c.status();
+  return pb::CLASH_STATUS_UNSPECIFIED;
+}
+
+grpc::Status set_status(pb::Gatekeeper::Stub& stub, const std::string& scene, const std::string& clash, pb::ClashStatus status,
+                        pb::ClashStatusInfo* out) {
+  grpc::ClientContext ctx;
+  pb::SetClashStatusRequest request;
+  request.set_scene_id(scene);
+  request.set_clash_id(clash);
+  request.set_status(status);
+  return stub.SetClashStatus(&ctx, request, out);
+}
+
+std::map<std::string, pb::ClashStatusInfo> listed(pb::Gatekeeper::Stub& stub, const std::string& scene) {
+  grpc::ClientContext ctx;
+  pb::ListClashStatusesRequest request;
+  request.set_scene_id(scene);
+  pb::ListClashStatusesResponse response;
+  EXPECT_TRUE(stub.ListClashStatuses(&ctx, request, &response).ok());
+  std::map<std::string, pb::ClashStatusInfo> out;
+  for (const pb::ClashStatusInfo& s : response.statuses()) out[s.clash_id()] = s;
+  return out;
+}
+
+void move_to(pb::Gatekeeper::Stub& stub, const std::string& scene, const std::string& object, double x, double y) {
+  grpc::ClientContext ctx;
+  pb::MoveObjectRequest move;
+  move.set_scene_id(scene);
+  move.set_object_id(object);
+  move.mutable_pose()->mutable_translation()->set_x_mm(x);
+  move.mutable_pose()->mutable_translation()->set_y_mm(y);
+  pb::MoveResult moved;
+  ASSERT_TRUE(stub.MoveObject(&ctx, move, &moved).ok());
+}
+
+// Review statuses as a clash tool keeps them: NEW when first found, ACTIVE when found again, a
+// user's REVIEWED / APPROVED kept while found, RESOLVED when no longer found, ACTIVE again when
+// it comes back; kept across a restart, and carried into the BCF topics' TopicStatus.
+TEST(BcfExportE2E, ClashStatusesFollowThePairsAcrossAuditsRestartsAndIntoBcf) {
+  const std::string data = testing::temp_dir("clash-status");
+  auto daemon = std::make_unique<Daemon>(data);
+  auto stub = daemon->stub();
+  const std::string column = testing::upload_part_id(*stub, testing::box_obj(0, 0, 0, 400, 400, 8000), "obj");
+  const std::string pipe = testing::upload_part_id(*stub, testing::box_obj(0, 0, 0, 30000, 200, 200), "obj");
+  const std::string crate = testing::upload_part_id(*stub, testing::box_obj(0, 0, 0, 1000, 1000, 1000), "obj");
+  grpc::ClientContext cctx;
+  pb::CreateSceneRequest create;
+  create.set_name("hall");
+  pb::SceneInfo scene;
+  ASSERT_TRUE(stub->CreateScene(&cctx, create, &scene).ok());
+  const std::string id = scene.scene_id();
+  std::vector<std::string> columns;
+  for (int i = 0; i < 4; ++i) columns.push_back(put(*stub, id, "column" + std::to_string(i), "column", column, i * 8000.0, 0, 0));
+  const std::string pipe_id = put(*stub, id, "pipe", "pipe", pipe, -1000, 100, 3000);
+  const std::string a = put(*stub, id, "crate-a", "crate", crate, 2000, 3000, 0);
+  const std::string b = put(*stub, id, "crate-b", "crate", crate, 2995, 3000, 0);
+  const std::string c = put(*stub, id, "crate-c", "crate", crate, 4002, 3000, 0);
+  pb::StartAuditRequest start;
+  start.set_scene_id(id);
+  start.set_clearance_mm(10.0);
+  const pb::AuditReport first = testing::run_audit(*stub, start, false);
+  ASSERT_EQ(first.clashes_size(), 6);
+  for (const pb::Clash& k : first.clashes()) EXPECT_EQ(k.status(), pb::CLASH_NEW) << k.name_a() << " / " << k.name_b();
+  const auto clash_of = [&](const pb::AuditReport& r, const std::string& x, const std::string& y) {
+    for (const pb::Clash& k : r.clashes())
+      if ((k.object_a() == x && k.object_b() == y) || (k.object_a() == y && k.object_b() == x)) return k.clash_id();
+    return std::string();
+  };
+  const std::string pipe_column = clash_of(first, pipe_id, columns[0]);
+  const std::string crates_ab = clash_of(first, a, b);
+  const std::string crates_bc = clash_of(first, b, c);
+  ASSERT_FALSE(pipe_column.empty());
+  ASSERT_FALSE(crates_ab.empty());
+  ASSERT_FALSE(crates_bc.empty());
+  {
+    const auto kept = listed(*stub, id);
+    ASSERT_EQ(kept.size(), 6u);
+    for (const auto& [k, s] : kept) {
+      EXPECT_EQ(s.status(), pb::CLASH_NEW);
+      EXPECT_EQ(s.first_job_id(), first.progress().job_id());
+    }
+  }
+  pb::ClashStatusInfo info;
+  ASSERT_TRUE(set_status(*stub, id, pipe_column, pb::CLASH_REVIEWED, &info).ok());
+  EXPECT_TRUE(info.set_by_user());
+  ASSERT_TRUE(set_status(*stub, id, crates_ab, pb::CLASH_APPROVED, &info).ok());
+  // Refusals name the field: NEW is the audits' own; an unknown clash or scene is NOT_FOUND.
+  grpc::Status refused = set_status(*stub, id, crates_ab, pb::CLASH_NEW, &info);
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(refused.error_message().find("status"), std::string::npos) << refused.error_message();
+  refused = set_status(*stub, id, "00000000-0000-8000-8000-000000000000", pb::CLASH_REVIEWED, &info);
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::NOT_FOUND);
+  EXPECT_NE(refused.error_message().find("clash_id"), std::string::npos) << refused.error_message();
+  refused = set_status(*stub, "no-such-scene", pipe_column, pb::CLASH_REVIEWED, &info);
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::NOT_FOUND);
+
+  // crate-c moved away: its clearance clash with crate-b is no longer found.
+  move_to(*stub, id, c, 4002, 9000);
+  const pb::AuditReport second = testing::run_audit(*stub, start, false);
+  ASSERT_EQ(second.clashes_size(), 5);
+  EXPECT_EQ(status_in(second, pipe_column), pb::CLASH_REVIEWED);
+  EXPECT_EQ(status_in(second, crates_ab), pb::CLASH_APPROVED);
+  for (const pb::Clash& k : second.clashes()) {
+    if (k.clash_id() != pipe_column && k.clash_id() != crates_ab) {
+      EXPECT_EQ(k.status(), pb::CLASH_ACTIVE) << k.name_a();
+    }
+  }
+  EXPECT_EQ(listed(*stub, id).at(crates_bc).status(), pb::CLASH_RESOLVED);
+
+  // Restarted: the statuses stay. crate-c back: its clash is found again, ACTIVE (reopened).
+  daemon.reset();
+  daemon = std::make_unique<Daemon>(data);
+  stub = daemon->stub();
+  EXPECT_EQ(listed(*stub, id).at(pipe_column).status(), pb::CLASH_REVIEWED);
+  move_to(*stub, id, c, 4002, 3000);
+  const pb::AuditReport third = testing::run_audit(*stub, start, false);
+  ASSERT_EQ(third.clashes_size(), 6);
+  EXPECT_EQ(status_in(third, crates_bc), pb::CLASH_ACTIVE);
+  EXPECT_EQ(status_in(third, pipe_column), pb::CLASH_REVIEWED);
+  EXPECT_EQ(listed(*stub, id).at(crates_bc).last_job_id(), third.progress().job_id());
+
+  // The BCF topics carry them.
+  std::string archive, error;
+  ASSERT_TRUE(client::write_bcf(third, {}, &archive, &error)) << error;
+  const std::string dir = testing::temp_dir("clash-status-bcf");
+  std::ofstream(dir + "/c.bcfzip", std::ios::binary) << archive;
+  EXPECT_EQ(run("python3 -m zipfile -e " + dir + "/c.bcfzip " + dir + "/u"), "");
+  const auto topic_status = [&](const std::string& clash) {
+    std::smatch m;
+    const std::string text = testing::read_file(dir + "/u/" + clash + "/markup.bcf");
+    return std::regex_search(text, m, std::regex("TopicStatus=\"([A-Za-z]+)\"")) ? std::string(m[1]) : std::string();
+  };
+  EXPECT_EQ(topic_status(pipe_column), "Reviewed");
+  EXPECT_EQ(topic_status(crates_ab), "Approved");
+  EXPECT_EQ(topic_status(crates_bc), "Active");
 }
 
 // A report without clash ids (an older daemon's) is refused rather than written with made-up Guids.
