@@ -29,6 +29,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -292,8 +293,21 @@ int main(int argc, char** argv) {
     pb::AuditReport reply;
     const grpc::Status status = gk::client::read_audit_report(*stub, id, &reply);
     if (status.ok() && !bcf_file.empty()) {
+      if (bcf_file == html_file) {
+        std::fprintf(stderr, "--bcf and --html name the same file\n");
+        return 2;
+      }
+      if (reply.progress().state() != pb::DONE)
+        std::fprintf(stderr, "--bcf: the audit is %s: the file holds the clashes found so far\n",
+                     pb::AuditState_Name(reply.progress().state()).c_str());
       std::string archive, error;
-      if (!gk::client::write_bcf(reply, {}, &archive, &error)) {
+      bool written = false;
+      try {
+        written = gk::client::write_bcf(reply, {}, &archive, &error);
+      } catch (const std::exception& e) {
+        error = e.what();
+      }
+      if (!written) {
         std::fprintf(stderr, "--bcf: %s\n", error.c_str());
         return 1;
       }

@@ -177,4 +177,10 @@ Result<std::vector<ClashStatusRecord>> Engine::clash_statuses(const std::string&
   return statuses_->list(scene_id);
 }
 
+Result<DisplayMesh> Engine::display_mesh(const std::string& part_id, std::size_t max_triangles) {
+  auto loaded = parts_.load(part_id, kPartDeflectionMm);
+  if (!loaded.ok()) return loaded.error();
+  return decimate_for_display(*loaded.value()->mesh, max_triangles);
+}
+
 }  // namespace gk::engine

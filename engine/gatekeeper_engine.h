@@ -14,6 +14,7 @@
 #include "engine/scenes/scene_store.h"
 #include "engine/steps/step_answers.h"
 #include "kernel/core/stop_token.h"
+#include "kernel/mesh/display_decimation.h"
 
 #include <memory>
 #include <set>
@@ -54,6 +55,8 @@ class Engine {
                                                    const std::string& sha256_hex);
   Result<PartRecord> finish_upload(std::unique_ptr<PartUpload> upload);
   Result<PartRecord> part(const std::string& part_id) const;
+  // A part's triangles thinned for drawing (a report page), at most max_triangles.
+  Result<DisplayMesh> display_mesh(const std::string& part_id, std::size_t max_triangles);
 
   // --- machines
   std::vector<MachineSnapshot> machines() const { return machines_.list(); }

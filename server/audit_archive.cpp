@@ -28,7 +28,7 @@ Result<bool> AuditArchive::save(const std::string& job_id, const AuditJob& job, 
   ::gatekeeper::server::ArchivedAudit archived;
   archived.set_job_id(job_id);
   progress_to_proto(job_id, snapshot, archived.mutable_report()->mutable_progress());
-  report_to_proto(snapshot, archived.mutable_report());
+  report_to_proto(snapshot, job.scene().id, archived.mutable_report());
   scene_to_proto(job.scene(), archived.mutable_scene());
   for (const AuditedObject& o : job.objects()) {
     auto* a = archived.add_objects();

@@ -58,7 +58,7 @@ Result<AuditOptions> to_audit_options(const pb::StartAuditRequest& in) {
   return asked;
 }
 
-void report_to_proto(const AuditSnapshot& snapshot, pb::AuditReport* out, std::size_t begin, std::size_t end) {
+void report_to_proto(const AuditSnapshot& snapshot, const std::string& scene_id, pb::AuditReport* out, std::size_t begin, std::size_t end) {
   end = std::min(end, snapshot.clashes.size());
   for (std::size_t i = std::min(begin, end); i < end; ++i) {
     const ClashRecord& r = snapshot.clashes[i];
@@ -66,7 +66,7 @@ void report_to_proto(const AuditSnapshot& snapshot, pb::AuditReport* out, std::s
     pb::Clash* p = out->add_clashes();
     p->set_object_a(r.a);
     p->set_object_b(r.b);
-    p->set_clash_id(engine::clash_id(r.a, r.b));
+    p->set_clash_id(engine::clash_id(scene_id, r.a, r.b));
     p->set_name_a(r.name_a);
     p->set_name_b(r.name_b);
     p->set_category_a(r.category_a);

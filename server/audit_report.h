@@ -16,7 +16,8 @@ void progress_to_proto(const std::string& job_id, const AuditSnapshot& s, pb::Au
 
 // Clashes, their groups and the job's statistics (the progress is filled separately).
 // Only the clashes [begin, end) (the groups and statistics always cover every clash).
-void report_to_proto(const AuditSnapshot& snapshot, pb::AuditReport* out, std::size_t begin = 0,
+// `scene_id`: the audited scene's (each clash's id is derived from it and the pair).
+void report_to_proto(const AuditSnapshot& snapshot, const std::string& scene_id, pb::AuditReport* out, std::size_t begin = 0,
                      std::size_t end = static_cast<std::size_t>(-1));
 
 // A page of a report: the clashes [begin, end) and the token of the next page (empty: the last).

@@ -10,7 +10,9 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
+#include <map>
 #include <set>
 #include <thread>
 
@@ -294,7 +296,7 @@ grpc::ServerUnaryReactor* GatekeeperService::GetAuditReport(grpc::CallbackServer
     auto page = report_page(get, snapshot.clashes.size());
     if (!page.ok()) return grpc::Status(to_status(page.error()));
     progress_to_proto(get.job_id(), snapshot, out->mutable_progress());
-    report_to_proto(snapshot, out, page.value().begin, page.value().end);
+    report_to_proto(snapshot, job.value()->scene().id, out, page.value().begin, page.value().end);
     auto statuses = engine_.clash_statuses(job.value()->scene().id);
     // The scene may be gone since the audit: its clashes then have no kept status.
     const std::vector<engine::ClashStatusRecord> kept = statuses.ok() ? statuses.value() : std::vector<engine::ClashStatusRecord>{};
@@ -306,9 +308,26 @@ grpc::ServerUnaryReactor* GatekeeperService::GetAuditReport(grpc::CallbackServer
       // The page shows every clash, whichever page of them this reply holds.
       pb::AuditReport whole;
       progress_to_proto(get.job_id(), snapshot, whole.mutable_progress());
-      report_to_proto(snapshot, &whole);
+      report_to_proto(snapshot, job.value()->scene().id, &whole);
       add_clash_statuses(kept, &whole);
-      out->set_html(audit_report_page(whole, job.value()->scene().name, job.value()->objects()));
+      // Every object in a clash is drawn with its part's mesh, thinned: about 300,000 triangles in
+      // all, at most 20,000 a part. A part that cannot be loaded now is drawn as its box.
+      const SceneRecord& audited = job.value()->scene();
+      std::map<std::string, PlacedMesh> placed;
+      for (const pb::Clash& c : whole.clashes())
+        for (const std::string& id : {c.object_a(), c.object_b()}) {
+          const auto o = audited.objects.find(id);
+          if (o != audited.objects.end()) placed[id] = {o->second.part_id, o->second.pose.transform()};
+        }
+      std::set<std::string> part_ids;
+      for (const auto& [id, p] : placed) part_ids.insert(p.part_id);
+      const std::size_t per_part = std::clamp<std::size_t>(300000 / std::max<std::size_t>(part_ids.size(), 1), 200, 20000);
+      std::map<std::string, DisplayMesh> meshes;
+      for (const std::string& part : part_ids) {
+        auto mesh = engine_.display_mesh(part, per_part);
+        if (mesh.ok()) meshes[part] = std::move(mesh).value();
+      }
+      out->set_html(audit_report_page(whole, audited.name, job.value()->objects(), meshes, placed));
     }
     return grpc::Status(grpc::Status::OK);
   });

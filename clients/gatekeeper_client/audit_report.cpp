@@ -8,6 +8,9 @@ grpc::Status read_audit_report(::gatekeeper::v1::Gatekeeper::Stub& stub, const s
   request.set_job_id(job_id);
   request.set_page_size(options.page_size);
   report->Clear();
+  // A running audit lists its clashes as found and sorts them when it ends: pages read across its
+  // end would overlap and miss some. Then the report is read again from its first page.
+  int restarts = 0;
   for (;;) {
     grpc::ClientContext ctx;
     ctx.set_deadline(std::chrono::system_clock::now() + options.deadline);
@@ -17,6 +20,11 @@ grpc::Status read_audit_report(::gatekeeper::v1::Gatekeeper::Stub& stub, const s
     // The first page brings the groups and statistics; later ones add their clashes.
     if (request.page_token().empty()) {
       *report = page;
+    } else if (page.progress().state() != report->progress().state()) {
+      if (++restarts > 3) return grpc::Status(grpc::StatusCode::ABORTED, "the report kept changing while it was read; try again");
+      request.clear_page_token();
+      report->Clear();
+      continue;
     } else {
       for (auto& clash : *page.mutable_clashes()) *report->add_clashes() = std::move(clash);
       *report->mutable_progress() = page.progress();

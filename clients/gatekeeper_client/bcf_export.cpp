@@ -18,7 +18,15 @@ namespace {
 
 std::string xml_text(const std::string& in) {
   std::string out;
-  for (char c : in) {
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    const char c = in[i];
+    // U+FFFE and U+FFFF (EF BF BE / EF BF BF) are not XML characters: the replacement character.
+    if (static_cast<unsigned char>(c) == 0xEF && i + 2 < in.size() && static_cast<unsigned char>(in[i + 1]) == 0xBF &&
+        (static_cast<unsigned char>(in[i + 2]) == 0xBE || static_cast<unsigned char>(in[i + 2]) == 0xBF)) {
+      out += "\xEF\xBF\xBD";
+      i += 2;
+      continue;
+    }
     switch (c) {
       case '&': out += "&amp;"; break;
       case '<': out += "&lt;"; break;

@@ -33,9 +33,10 @@ std::uint32_t crc32_of(const std::string& bytes) {
 }
 
 void ZipWriter::add(const std::string& name, const std::string& content) {
-  // Without the zip64 extension an archive holds at most 4 GiB and 65,535 entries.
-  if (body_.size() + content.size() + name.size() + 30 > 0xFFFFFFFFull || entries_.size() >= 0xFFFF)
-    throw std::length_error("the archive would exceed the zip format's 4 GiB / 65,535 entries");
+  // Entries past 65,535 are counted in the zip64 end records; every offset and size must still
+  // fit 32 bits (4 GiB: about a million BCF topics), which this writer does not go beyond.
+  if (body_.size() + content.size() + name.size() + 30 > 0xFFFFFFFFull)
+    throw std::length_error("the archive would exceed 4 GiB, which this zip writer does not write");
   Entry e{name, crc32_of(content), static_cast<std::uint32_t>(content.size()), static_cast<std::uint32_t>(body_.size())};
   put32(body_, 0x04034b50);  // local file header
   put16(body_, 20);          // version needed: 2.0
@@ -76,13 +77,37 @@ std::string ZipWriter::finish() const {
     put32(out, e.offset);
     out += e.name;
   }
-  const auto directory_size = static_cast<std::uint32_t>(out.size() - directory_offset);
+  const std::uint64_t directory_size = out.size() - directory_offset;
+  if (out.size() > 0xFFFFFFFFull) throw std::length_error("the archive would exceed 4 GiB, which this zip writer does not write");
+  const bool zip64 = entries_.size() > 0xFFFE;
+  if (zip64) {
+    const std::uint64_t zip64_end = out.size();
+    const auto put64 = [&](std::uint64_t v) {
+      put32(out, static_cast<std::uint32_t>(v & 0xFFFFFFFFu));
+      put32(out, static_cast<std::uint32_t>(v >> 32));
+    };
+    put32(out, 0x06064b50);  // zip64 end of central directory
+    put64(44);               // its size after this field
+    put16(out, 45);          // made by: 4.5 (zip64)
+    put16(out, 45);
+    put32(out, 0);
+    put32(out, 0);
+    put64(entries_.size());
+    put64(entries_.size());
+    put64(directory_size);
+    put64(directory_offset);
+    put32(out, 0x07064b50);  // its locator
+    put32(out, 0);
+    put64(zip64_end);
+    put32(out, 1);
+  }
+  const std::uint32_t count = zip64 ? 0xFFFFu : static_cast<std::uint32_t>(entries_.size());
   put32(out, 0x06054b50);  // end of central directory
   put16(out, 0);
   put16(out, 0);
-  put16(out, static_cast<std::uint32_t>(entries_.size()));
-  put16(out, static_cast<std::uint32_t>(entries_.size()));
-  put32(out, directory_size);
+  put16(out, count);
+  put16(out, count);
+  put32(out, static_cast<std::uint32_t>(directory_size));
   put32(out, directory_offset);
   put16(out, 0);
   return out;

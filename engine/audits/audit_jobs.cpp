@@ -71,7 +71,7 @@ bool AuditJobs::submit(const std::string& id, std::shared_ptr<AuditJob> job) {
             if (statuses_ && final_state.status == AuditStatus::kDone) {
               std::vector<FoundClash> found;
               found.reserve(final_state.clashes.size());
-              for (const ClashRecord& c : final_state.clashes) found.push_back({clash_id(c.a, c.b), c.a, c.b});
+              for (const ClashRecord& c : final_state.clashes) found.push_back({clash_id(job->scene().id, c.a, c.b), c.a, c.b});
               auto recorded = statuses_->record_audit(job->scene().id, id, found);
               if (!recorded.ok()) spdlog::warn("audit {}: clash statuses not updated: {}", id, recorded.error().to_string());
             }

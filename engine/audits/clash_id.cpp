@@ -7,13 +7,14 @@
 
 namespace gk::engine {
 
-std::string clash_id(const std::string& object_a, const std::string& object_b) {
+std::string clash_id(const std::string& scene_id, const std::string& object_a, const std::string& object_b) {
   const std::string& first = object_a < object_b ? object_a : object_b;
   const std::string& second = object_a < object_b ? object_b : object_a;
-  static const char kDomain[] = "gatekeeper clash id 1";
+  static const char kDomain[] = "gatekeeper clash id 2";
   ContentHash hash;
   hash.add_bytes(kDomain, sizeof kDomain);
   // Lengths first: ("ab", "c") and ("a", "bc") must differ.
+  hash.add(static_cast<std::uint64_t>(scene_id.size())).add_bytes(scene_id.data(), scene_id.size());
   hash.add(static_cast<std::uint64_t>(first.size())).add_bytes(first.data(), first.size());
   hash.add(static_cast<std::uint64_t>(second.size())).add_bytes(second.data(), second.size());
   const Hash128 h = hash.value();

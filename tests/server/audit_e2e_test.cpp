@@ -11,6 +11,7 @@
 #include "tests/support/random_meshes.h"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <signal.h>
 #include <sqlite3.h>
 
@@ -213,6 +214,33 @@ TEST(AuditE2E, AFactoryAuditWithRulesEqualsEveryPairAndItsPageDrawsInChromium) {
   EXPECT_NE(body.find("data-rows=\"6\""), std::string::npos) << body;
   EXPECT_NE(body.find("data-drawn-markers=\"6\""), std::string::npos) << body;
   EXPECT_NE(body.find("data-drawn-objects=\"" + std::to_string(placed.size()) + "\""), std::string::npos) << body;
+  // The 8 objects in a clash (pipe, 4 columns, 3 crates) with their meshes, the others as boxes.
+  EXPECT_NE(body.find("data-drawn-meshes=\"8\""), std::string::npos) << body;
+  // Opened on clash 1: the view frames both its objects (the union of their boxes).
+  const std::string framed_dom = run("chromium --headless=new --no-sandbox --disable-dev-shm-usage --enable-unsafe-swiftshader "
+                                     "--use-angle=swiftshader --virtual-time-budget=10000 --dump-dom 'file://" + page + "#clash=1' 2>/dev/null");
+  ASSERT_TRUE(std::regex_search(framed_dom, m, std::regex("<body([^>]*)>")));
+  const std::string framed_body = m[1];
+  EXPECT_NE(framed_body.find("data-selected=\"1\""), std::string::npos) << framed_body;
+  {
+    const std::size_t script = html.find("<script id=\"report-data\" type=\"application/json\">");
+    ASSERT_NE(script, std::string::npos);
+    const std::size_t from = html.find('>', script) + 1;
+    const nlohmann::json data = nlohmann::json::parse(html.substr(from, html.find("</script>", from) - from));
+    const auto& first = data["clashes"][0];
+    const auto& oa = data["objects"][first["a_index"].get<std::size_t>()];
+    const auto& ob = data["objects"][first["b_index"].get<std::size_t>()];
+    std::string union_box;
+    for (const char* end : {"min", "max"})
+      for (int k = 0; k < 3; ++k) {
+        const double a = oa[end][k].get<double>(), b = ob[end][k].get<double>();
+        char text[32];
+        std::snprintf(text, sizeof text, "%s%.0f", union_box.empty() ? "" : ",", std::string(end) == "min" ? std::min(a, b) : std::max(a, b));
+        union_box += text;
+      }
+    EXPECT_NE(framed_body.find("data-framed=\"" + union_box + "\""), std::string::npos) << framed_body << " expected " << union_box;
+    EXPECT_GT(data["parts"].size(), 0u);
+  }
   EXPECT_NE(body.find("data-renderer=\"webgl\""), std::string::npos) << body;  // the 3D view, not the 2D fallback
   std::printf("chromium: %s\n", body.c_str());
   EXPECT_NE(dom.find("crate-b"), std::string::npos);

@@ -2,6 +2,7 @@
 // real gatekeeper-cli writes the .bcfzip, Python's zipfile checks every entry's CRC and unpacks it,
 // and xmllint validates every file against buildingSMART's own schemas (tests/data/bcf-2.1).
 #include "clients/gatekeeper_client/bcf_export.h"
+#include "clients/gatekeeper_client/zip_writer.h"
 #include "tests/server/daemon_fixture.h"
 
 #include <gtest/gtest.h>
@@ -267,6 +268,39 @@ TEST(BcfExportE2E, ClashStatusesFollowThePairsAcrossAuditsRestartsAndIntoBcf) {
   EXPECT_EQ(topic_status(pipe_column), "Reviewed");
   EXPECT_EQ(topic_status(crates_ab), "Approved");
   EXPECT_EQ(topic_status(crates_bc), "Active");
+}
+
+// A factory's audit can list more clashes than a plain zip counts (65,535 entries: 32,767 BCF
+// topics): the archive then carries the zip64 end records, and Python's zipfile reads every entry.
+TEST(BcfExport, AnArchiveOfMoreThan65535EntriesIsReadWhole) {
+  client::ZipWriter zip(0x5B7B, 0);
+  for (int i = 0; i < 70000; ++i) zip.add("topic-" + std::to_string(i) + "/markup.bcf", "<Markup>" + std::to_string(i) + "</Markup>");
+  const std::string dir = testing::temp_dir("zip64");
+  std::ofstream(dir + "/big.zip", std::ios::binary) << zip.finish();
+  const std::string listed = run("python3 -c \"import zipfile,sys; z=zipfile.ZipFile(sys.argv[1]); print(len(z.namelist()), z.testzip(), "
+                                 "z.read('topic-69999/markup.bcf').decode())\" " + dir + "/big.zip");
+  EXPECT_EQ(listed, "70000 None <Markup>69999</Markup>\n");
+}
+
+// Names may hold U+FFFE or U+FFFF, which XML does not allow: the files stay valid (the
+// replacement character instead).
+TEST(BcfExport, NonCharactersInNamesLeaveValidXml) {
+  pb::AuditReport report;
+  pb::Clash* c = report.add_clashes();
+  c->set_object_a("a");
+  c->set_object_b("b");
+  c->set_name_a("pipe \xEF\xBF\xBE end");
+  c->set_category_a("duct \xEF\xBF\xBF");
+  c->set_clash_id("0123abcd-0000-8000-8000-000000000001");
+  c->set_verdict(pb::COLLISION);
+  std::string archive, error;
+  ASSERT_TRUE(client::write_bcf(report, {}, &archive, &error)) << error;
+  const std::string dir = testing::temp_dir("bcf-nonchar");
+  std::ofstream(dir + "/x.bcfzip", std::ios::binary) << archive;
+  EXPECT_EQ(run("python3 -m zipfile -e " + dir + "/x.bcfzip " + dir + "/u"), "");
+  const std::string markup = run("xmllint --noout --schema " + std::string(GATEKEEPER_BCF_SCHEMAS) + "/markup.xsd " + dir +
+                                 "/u/0123abcd-0000-8000-8000-000000000001/markup.bcf");
+  EXPECT_NE(markup.find("validates"), std::string::npos) << markup;
 }
 
 // A report without clash ids (an older daemon's) is refused rather than written with made-up Guids.

@@ -473,7 +473,7 @@ TEST(ServiceInProcess, AnArchivedReportOfTheOlderRegionMessageReadsBackAsContact
   EXPECT_EQ(place.point_b.x(), 7.0);
   EXPECT_EQ(place.bounds.max.x(), 9.0);
   pb::AuditReport again;
-  report_to_proto(snapshot, &again);
+  report_to_proto(snapshot, "scene", &again);
   ASSERT_EQ(again.clashes(0).contact_regions_size(), 1);
   ASSERT_EQ(again.clashes(0).regions_size(), 1);
   EXPECT_EQ(again.clashes(0).contact_regions(0).triangle_pairs(), 12u);
