@@ -311,17 +311,22 @@ grpc::ServerUnaryReactor* GatekeeperService::GetAuditReport(grpc::CallbackServer
       report_to_proto(snapshot, job.value()->scene().id, &whole);
       add_clash_statuses(kept, &whole);
       // Every object in a clash is drawn with its part's mesh, thinned: about 300,000 triangles in
-      // all, at most 20,000 a part. A part that cannot be loaded now is drawn as its box.
+      // all, 50 to 20,000 a part, so at most 6,000 distinct parts (those of the first clashes in
+      // the report's order); the other objects, and a part that cannot be loaded now, are boxes.
+      constexpr std::size_t kPageTriangles = 300000, kPartTrianglesMin = 50, kPartTrianglesMax = 20000;
       const SceneRecord& audited = job.value()->scene();
       std::map<std::string, PlacedMesh> placed;
+      std::set<std::string> part_ids;
       for (const pb::Clash& c : whole.clashes())
         for (const std::string& id : {c.object_a(), c.object_b()}) {
           const auto o = audited.objects.find(id);
-          if (o != audited.objects.end()) placed[id] = {o->second.part_id, o->second.pose.transform()};
+          if (o == audited.objects.end()) continue;
+          if (!part_ids.count(o->second.part_id) && part_ids.size() >= kPageTriangles / kPartTrianglesMin) continue;
+          part_ids.insert(o->second.part_id);
+          placed[id] = {o->second.part_id, o->second.pose.transform()};
         }
-      std::set<std::string> part_ids;
-      for (const auto& [id, p] : placed) part_ids.insert(p.part_id);
-      const std::size_t per_part = std::clamp<std::size_t>(300000 / std::max<std::size_t>(part_ids.size(), 1), 200, 20000);
+      const std::size_t per_part =
+          std::clamp<std::size_t>(kPageTriangles / std::max<std::size_t>(part_ids.size(), 1), kPartTrianglesMin, kPartTrianglesMax);
       std::map<std::string, DisplayMesh> meshes;
       for (const std::string& part : part_ids) {
         auto mesh = engine_.display_mesh(part, per_part);
