@@ -65,10 +65,20 @@ def read_audit_report(stub, job_id, page_size=5000, timeout=120.0):
     gRPC's default 4 MiB receive limit in one reply); its HTML page is asked for separately."""
     request = pb.GetAuditReportRequest(job_id=job_id, page_size=page_size)
     report = None
+    restarts = 0
     while True:
         page = stub.GetAuditReport(request, timeout=timeout)
         if report is None:
             report = page
+        elif page.progress.state != report.progress.state:
+            # A running audit lists its clashes as found and sorts them when it ends: pages read
+            # across its end would overlap. Read again from the first page.
+            restarts += 1
+            if restarts > 3:
+                raise RuntimeError("the report kept changing while it was read; try again")
+            request.page_token = ""
+            report = None
+            continue
         else:
             report.clashes.extend(page.clashes)
             report.progress.CopyFrom(page.progress)
@@ -76,4 +86,5 @@ def read_audit_report(stub, job_id, page_size=5000, timeout=120.0):
             break
         request.page_token = page.next_page_token
     report.next_page_token = ""
+    report.clashes_total = len(report.clashes)
     return report
