@@ -197,7 +197,8 @@ void add_clash_statuses(const std::vector<engine::ClashStatusRecord>& statuses, 
   for (const engine::ClashStatusRecord& r : statuses) by_id[r.clash_id] = r.status;
   for (pb::Clash& c : *report->mutable_clashes()) {
     const auto it = by_id.find(c.clash_id());
-    c.set_status(it == by_id.end() ? pb::CLASH_NEW : to_proto(it->second));
+    // No record: a running or cancelled audit's pair no finished audit has found (yet).
+    c.set_status(it == by_id.end() ? pb::CLASH_STATUS_UNSPECIFIED : to_proto(it->second));
   }
 }
 

@@ -28,8 +28,9 @@ struct ReportPage {
 // The page a request asks for; an error names page_size or page_token.
 Result<ReportPage> report_page(const pb::GetAuditReportRequest& request, std::size_t clashes);
 
-// Review statuses: each clash of the report gets its pair's status now (NEW for a pair no
-// finished audit has recorded yet); a status record and a request's status.
+// Review statuses: each clash of the report gets its pair's status now (UNSPECIFIED for a pair
+// no finished audit has recorded: a running or cancelled audit's); a status record and a
+// request's status.
 void add_clash_statuses(const std::vector<engine::ClashStatusRecord>& statuses, pb::AuditReport* report);
 void status_to_proto(const engine::ClashStatusRecord& r, pb::ClashStatusInfo* out);
 Result<engine::ClashStatus> clash_status_from_proto(pb::ClashStatus status);

@@ -130,7 +130,9 @@ std::string audit_report_page(const pb::AuditReport& report, const std::string& 
   data["by_region"] = groups(report.by_region());
   data["by_object"] = groups(report.by_object());
   std::string payload = data.dump();
-  replace_all(payload, "</", "<\\/");  // never close the script element early
+  // No '<' at all inside the data block: "</script" would close it early and "<!--" would put
+  // the HTML parser into a state that swallows the scripts after it.
+  replace_all(payload, "<", "\\u003c");
   std::string page = audit_report_template();
   replace_all(page, "@SCENE_NAME@", html_escape(scene_name.empty() ? "(unnamed scene)" : scene_name));
   // three.js last: its text must not be searched for placeholders.

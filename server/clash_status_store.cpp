@@ -145,17 +145,29 @@ Result<ClashStatusRecord> ClashStatusStore::set(const std::string& scene_id, con
   if (status == ClashStatus::kNew)
     return invalid_argument("status", "NEW is the audits' own status; set REVIEWED, APPROVED, ACTIVE or RESOLVED");
   std::lock_guard<std::mutex> lock(mutex_);
-  Statement s(db_, (std::string("SELECT ") + kColumns + " FROM clash_statuses WHERE scene_id = ? AND clash_id = ?").c_str());
-  if (!s.ok()) return storage_error("cannot read the clash status");
-  s.text(1, scene_id).text(2, clash_id);
-  const int rc = s.step();
-  if (rc == SQLITE_DONE)
-    return Error{ErrorCode::kNotFound, "clash_id", "no audit of scene '" + scene_id + "' found a clash '" + clash_id + "'"};
-  if (rc != SQLITE_ROW) return storage_error("cannot read the clash status");
-  ClashStatusRecord r = record_of(s);
+  // The write lock first (waiting for an audit's transaction, busy_timeout): a read turned into a
+  // write fails at once when another connection wrote in between.
+  if (sqlite3_exec(db_, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr) != SQLITE_OK)
+    return storage_error("cannot begin the clash status transaction");
+  const auto fail = [&](const Error& e) -> Result<ClashStatusRecord> {
+    sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+    return e;
+  };
+  ClashStatusRecord r;
+  {
+    Statement s(db_, (std::string("SELECT ") + kColumns + " FROM clash_statuses WHERE scene_id = ? AND clash_id = ?").c_str());
+    if (!s.ok()) return fail(storage_error("cannot read the clash status"));
+    s.text(1, scene_id).text(2, clash_id);
+    const int rc = s.step();
+    if (rc == SQLITE_DONE)
+      return fail(Error{ErrorCode::kNotFound, "clash_id", "no audit of scene '" + scene_id + "' found a clash '" + clash_id + "'"});
+    if (rc != SQLITE_ROW) return fail(storage_error("cannot read the clash status"));
+    r = record_of(s);
+  }
   r.status = status;
   r.set_by_user = true;
-  if (auto w = write_row(db_, r); !w.ok()) return w.error();
+  if (auto w = write_row(db_, r); !w.ok()) return fail(w.error());
+  if (sqlite3_exec(db_, "COMMIT", nullptr, nullptr, nullptr) != SQLITE_OK) return fail(storage_error("cannot commit the clash status"));
   return r;
 }
 

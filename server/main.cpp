@@ -41,6 +41,8 @@
 #include <filesystem>
 #include <fstream>
 #include <pthread.h>
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 
@@ -223,6 +225,15 @@ int main(int argc, char** argv) {
       std::filesystem::permissions(it->path(), std::filesystem::perms::group_all | std::filesystem::perms::others_all,
                                    std::filesystem::perm_options::remove | std::filesystem::perm_options::nofollow, ec);
     }
+  }
+
+  // One daemon per data directory: a second one would resume the first one's audits and write
+  // the same databases. The lock goes with the process (also on kill -9).
+  const std::string lock_path = config.data_dir + "/gatekeeperd.lock";
+  const int lock_fd = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0600);
+  if (lock_fd < 0 || ::flock(lock_fd, LOCK_EX | LOCK_NB) != 0) {
+    spdlog::error("data_dir: another gatekeeperd is using {} (or {} cannot be locked)", config.data_dir, lock_path);
+    return 1;
   }
 
   auto store = gk::engine::PartStore::open(config.data_dir);

@@ -60,15 +60,16 @@ DisplayMesh decimate_for_display(const TriangleMesh& mesh, std::size_t max_trian
   max_triangles = std::max<std::size_t>(max_triangles, 1);
   if (mesh.triangle_count() <= max_triangles) return as_is(mesh);
   const Aabb box = mesh.bounds();
-  // A closed surface on an n-cell grid keeps about 4 n^2 triangles: start there, then coarsen.
-  int cells = std::max(2, static_cast<int>(std::sqrt(static_cast<double>(max_triangles) / 4.0)));
+  // A closed surface on an n-cell grid keeps a few n^2 triangles: start finer than that, then
+  // coarsen in small steps, so the result comes close to the budget.
+  int cells = std::max(2, static_cast<int>(2.0 * std::sqrt(static_cast<double>(max_triangles))));
   for (;;) {
     DisplayMesh out = clustered(mesh, box, cells);
     if (out.triangles.size() <= max_triangles || cells <= 1) {
       if (out.triangles.size() > max_triangles) out.triangles.resize(max_triangles);
       return out;
     }
-    cells = std::max(1, cells * 3 / 4);
+    cells = std::max(1, std::min(cells - 1, static_cast<int>(cells * 0.85)));
   }
 }
 

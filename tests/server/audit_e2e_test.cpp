@@ -121,7 +121,7 @@ TEST(AuditE2E, AFactoryAuditWithRulesEqualsEveryPairAndItsPageDrawsInChromium) {
   placed.push_back({"crate-a", "crate", "", crate, Vec3(2000, 3000, 0)});
   placed.push_back({"crate-b", "crate", "", crate, Vec3(2995, 3000, 0)});     // overlaps crate-a by 5 mm
   placed.push_back({"crate-c", "crate", "", crate, Vec3(4002, 3000, 0)});     // 7 mm from crate-b: a clearance violation
-  placed.push_back({"crate-d", "crate", "", crate, Vec3(9000, 3000, 0)});     // alone
+  placed.push_back({"crate-d <!--<script>", "crate", "", crate, Vec3(9000, 3000, 0)});     // alone
   for (int r = 0; r < 3; ++r) {                                                // robots: links of one robot overlap
     const std::string group = "robot" + std::to_string(r);
     placed.push_back({group + "/base", "robot", group, link0, Vec3(14000.0 + 3000 * r, 5000, 0), 30.0 * r});

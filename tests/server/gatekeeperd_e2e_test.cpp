@@ -41,6 +41,26 @@ grpc::Status upload(pb::Gatekeeper::Stub& stub, const std::string& bytes, const 
   return testing::upload_part(stub, bytes, format, info, declared_sha, chunk);
 }
 
+// One daemon per data directory: a second one started on it refuses, naming the directory,
+// instead of resuming the first one's audits and writing its databases.
+TEST(GatekeeperdE2E, ASecondDaemonOnTheSameDataDirectoryRefusesToStart) {
+  const std::string dir = testing::temp_dir("one-daemon");
+  Daemon first(dir);
+  std::string out;
+  FILE* pipe = popen(("timeout 30 " + std::string(GATEKEEPERD_PATH) + " --listen 127.0.0.1:0 --data-dir " + dir +
+                      " 2>&1; echo \"exit=$?\"").c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  char buffer[4096];
+  while (std::size_t n = fread(buffer, 1, sizeof buffer, pipe)) out.append(buffer, n);
+  pclose(pipe);
+  EXPECT_NE(out.find("another gatekeeperd is using"), std::string::npos) << out;
+  EXPECT_NE(out.find("exit=1"), std::string::npos) << out;
+  // The first one still answers.
+  grpc::ClientContext ctx;
+  pb::ListMachinesResponse machines;
+  EXPECT_TRUE(first.stub()->ListMachines(&ctx, pb::ListMachinesRequest(), &machines).ok());
+}
+
 TEST(GatekeeperdE2E, ValidateStepAnswersClearAndCollisionWithItsStageAndTimes) {
   Daemon daemon(testing::temp_dir("validate"));
   auto stub = daemon.stub();
