@@ -40,6 +40,25 @@ class Statement {
   sqlite3_stmt* stmt_ = nullptr;
 };
 
+// BEGIN IMMEDIATE (the write lock first, waiting up to busy_timeout: a read turned into a write
+// fails at once when another connection wrote in between), rolled back unless committed.
+class WriteTransaction {
+ public:
+  explicit WriteTransaction(sqlite3* db) : db_(db), begun_(sqlite3_exec(db, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr) == SQLITE_OK) {}
+  ~WriteTransaction() {
+    if (begun_ && !committed_) sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+  }
+  WriteTransaction(const WriteTransaction&) = delete;
+  WriteTransaction& operator=(const WriteTransaction&) = delete;
+  bool begun() const { return begun_; }
+  bool commit() { return committed_ = sqlite3_exec(db_, "COMMIT", nullptr, nullptr, nullptr) == SQLITE_OK; }
+
+ private:
+  sqlite3* db_;
+  bool begun_;
+  bool committed_ = false;
+};
+
 constexpr const char* kColumns = "scene_id, clash_id, object_a, object_b, status, set_by_user, first_job, last_job";
 
 // Stored as the enumeration's number; an unknown number (a damaged row) reads as ACTIVE, which
@@ -103,14 +122,10 @@ ClashStatusStore::~ClashStatusStore() {
 Result<bool> ClashStatusStore::record_audit(const std::string& scene_id, const std::string& job_id,
                                             const std::vector<engine::FoundClash>& found) {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (sqlite3_exec(db_, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr) != SQLITE_OK)
-    return storage_error("cannot begin the clash status transaction");
-  const auto fail = [&](const Error& e) -> Result<bool> {
-    sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
-    return e;
-  };
+  WriteTransaction transaction(db_);
+  if (!transaction.begun()) return storage_error("cannot begin the clash status transaction");
   auto rows = rows_of(db_, scene_id);
-  if (!rows.ok()) return fail(rows.error());
+  if (!rows.ok()) return rows.error();
   std::map<std::string, ClashStatusRecord> known;
   for (ClashStatusRecord& r : rows.value()) known.emplace(r.clash_id, std::move(r));
   std::set<std::string> seen;
@@ -128,16 +143,16 @@ Result<bool> ClashStatusStore::record_audit(const std::string& scene_id, const s
       }
       r.last_job_id = job_id;
     }
-    if (auto w = write_row(db_, r); !w.ok()) return fail(w.error());
+    if (auto w = write_row(db_, r); !w.ok()) return w.error();
   }
   for (const auto& [id, r] : known) {
     if (seen.count(id) || r.status == ClashStatus::kResolved) continue;
     ClashStatusRecord gone = r;
     gone.status = ClashStatus::kResolved;
     gone.set_by_user = false;
-    if (auto w = write_row(db_, gone); !w.ok()) return fail(w.error());
+    if (auto w = write_row(db_, gone); !w.ok()) return w.error();
   }
-  if (sqlite3_exec(db_, "COMMIT", nullptr, nullptr, nullptr) != SQLITE_OK) return fail(storage_error("cannot commit the clash statuses"));
+  if (!transaction.commit()) return storage_error("cannot commit the clash statuses");
   return true;
 }
 
@@ -145,29 +160,23 @@ Result<ClashStatusRecord> ClashStatusStore::set(const std::string& scene_id, con
   if (status == ClashStatus::kNew)
     return invalid_argument("status", "NEW is the audits' own status; set REVIEWED, APPROVED, ACTIVE or RESOLVED");
   std::lock_guard<std::mutex> lock(mutex_);
-  // The write lock first (waiting for an audit's transaction, busy_timeout): a read turned into a
-  // write fails at once when another connection wrote in between.
-  if (sqlite3_exec(db_, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr) != SQLITE_OK)
-    return storage_error("cannot begin the clash status transaction");
-  const auto fail = [&](const Error& e) -> Result<ClashStatusRecord> {
-    sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
-    return e;
-  };
+  WriteTransaction transaction(db_);
+  if (!transaction.begun()) return storage_error("cannot begin the clash status transaction");
   ClashStatusRecord r;
   {
     Statement s(db_, (std::string("SELECT ") + kColumns + " FROM clash_statuses WHERE scene_id = ? AND clash_id = ?").c_str());
-    if (!s.ok()) return fail(storage_error("cannot read the clash status"));
+    if (!s.ok()) return storage_error("cannot read the clash status");
     s.text(1, scene_id).text(2, clash_id);
     const int rc = s.step();
     if (rc == SQLITE_DONE)
-      return fail(Error{ErrorCode::kNotFound, "clash_id", "no audit of scene '" + scene_id + "' found a clash '" + clash_id + "'"});
-    if (rc != SQLITE_ROW) return fail(storage_error("cannot read the clash status"));
+      return Error{ErrorCode::kNotFound, "clash_id", "no audit of scene '" + scene_id + "' found a clash '" + clash_id + "'"};
+    if (rc != SQLITE_ROW) return storage_error("cannot read the clash status");
     r = record_of(s);
   }
   r.status = status;
   r.set_by_user = true;
-  if (auto w = write_row(db_, r); !w.ok()) return fail(w.error());
-  if (sqlite3_exec(db_, "COMMIT", nullptr, nullptr, nullptr) != SQLITE_OK) return fail(storage_error("cannot commit the clash status"));
+  if (auto w = write_row(db_, r); !w.ok()) return w.error();
+  if (!transaction.commit()) return storage_error("cannot commit the clash status");
   return r;
 }
 
