@@ -1,5 +1,7 @@
 #include "engine/audits/scene_audit.h"
 
+#include "engine/audits/tile_scheduler.h"
+
 #include "kernel/broadphase/broad_phase.h"
 #include "kernel/measure/contact_regions.h"
 #include "kernel/measure/interference_volume.h"
@@ -41,14 +43,15 @@ void parallel_for(std::size_t n, int threads, Body&& body) {
 }
 
 // The narrow phase of one pair; false when the pair is neither in contact nor too close.
-bool audit_pair(const AuditObject& oa, const AuditObject& ob, const AuditOptions& options, PairClash& out) {
+bool audit_pair(const AuditObject& oa, const MeshBvh& ma, const AuditObject& ob, const MeshBvh& mb, const AuditOptions& options,
+                PairClash& out) {
   VerdictOptions vo;
   vo.max_contacts = options.max_contacts_per_pair;
   // Farther than the clearance (plus the window the triangles of CAD parts cannot resolve): not a
   // clash, no need to measure.
   const double reach = options.clearance_mm + oa.surface_deviation_mm + ob.surface_deviation_mm;
   vo.distance_upper_bound_mm = reach;
-  auto v = assess(*oa.mesh, oa.pose, *ob.mesh, ob.pose, vo);
+  auto v = assess(ma, oa.pose, mb, ob.pose, vo);
   if (!v.ok()) {
     out.verdict = Verdict::kInconclusive;  // a gate treats it as a clash
     out.inconclusive_reason = InconclusiveReason::kPairFailed;
@@ -70,7 +73,7 @@ bool audit_pair(const AuditObject& oa, const AuditObject& ob, const AuditOptions
     out.contacts_truncated = r.contacts_truncated;
     out.regions = contact_places(pairs, options.region_merge_mm);
   } else {
-    auto near = pairs_within(*oa.mesh, oa.pose, *ob.mesh, ob.pose, options.clearance_mm, options.max_contacts_per_pair);
+    auto near = pairs_within(ma, oa.pose, mb, ob.pose, options.clearance_mm, options.max_contacts_per_pair);
     if (near.ok()) {
       out.contacts = static_cast<unsigned>(near.value().pairs.size());
       out.contacts_truncated = near.value().truncated;
@@ -78,23 +81,23 @@ bool audit_pair(const AuditObject& oa, const AuditObject& ob, const AuditOptions
     }
   }
   if (options.compute_depth && r.verdict == Verdict::kCollision) {
-    auto depth = penetration_vector(*oa.mesh, oa.pose, *ob.mesh, ob.pose, kAuditDepthDirections, tolerances::kAuditDepthResolutionMm);
+    auto depth = penetration_vector(ma, oa.pose, mb, ob.pose, kAuditDepthDirections, tolerances::kAuditDepthResolutionMm);
     if (depth.ok()) {
       out.depth_mm = depth.value().depth_mm;
       out.depth_direction = Direction::of(depth.value().direction);
     }
   }
-  if (options.compute_volume && r.verdict == Verdict::kCollision && oa.mesh->mesh().is_closed_oriented() &&
-      ob.mesh->mesh().is_closed_oriented()) {
-    auto volume = interference_volume(*oa.mesh, oa.pose, *ob.mesh, ob.pose, kAuditVolumeRaysPerAxis);
+  if (options.compute_volume && r.verdict == Verdict::kCollision && ma.mesh().is_closed_oriented() &&
+      mb.mesh().is_closed_oriented()) {
+    auto volume = interference_volume(ma, oa.pose, mb, ob.pose, kAuditVolumeRaysPerAxis);
     if (volume.ok()) {
       // A CAD part's triangles are not its surface: the bound covers the band between them.
-      const Aabb ba = transformed_box(oa.mesh->root_bounds(), oa.pose), bb = transformed_box(ob.mesh->root_bounds(), ob.pose);
+      const Aabb ba = transformed_box(ma.root_bounds(), oa.pose), bb = transformed_box(mb.root_bounds(), ob.pose);
       const Aabb region{ba.min.cwiseMax(bb.min), ba.max.cwiseMin(bb.max)};
       out.volume_mm3 = volume.value().volume_mm3;
       out.volume_error_bound_mm3 = volume.value().error_bound_mm3 +
-                                   tessellation_band_volume(oa.mesh->mesh(), oa.pose, oa.surface_deviation_mm, region) +
-                                   tessellation_band_volume(ob.mesh->mesh(), ob.pose, ob.surface_deviation_mm, region);
+                                   tessellation_band_volume(ma.mesh(), oa.pose, oa.surface_deviation_mm, region) +
+                                   tessellation_band_volume(mb.mesh(), ob.pose, ob.surface_deviation_mm, region);
     }
   }
   return true;
@@ -105,7 +108,7 @@ std::optional<Error> validate(const std::vector<AuditObject>& objects, const Aud
     return invalid_argument("clearance_mm", "must be a finite, non-negative distance");
   if (!std::isfinite(options.tile_mm) || options.tile_mm < 0.0) return invalid_argument("tile_mm", "must be finite and >= 0");
   if (options.threads < 1 || options.threads > 256) return invalid_argument("threads", "must be in [1, 256]");
-  if (auto bad = check_objects(objects); !bad.ok()) return bad.error();
+  if (auto bad = check_objects(objects, true); !bad.ok()) return bad.error();
   for (std::uint32_t id : options.only_objects)
     if (id >= objects.size()) return invalid_argument("only_objects", "no object " + std::to_string(id));
   return std::nullopt;
@@ -113,15 +116,24 @@ std::optional<Error> validate(const std::vector<AuditObject>& objects, const Aud
 
 }  // namespace
 
-Result<bool> check_objects(const std::vector<AuditObject>& objects) {
+Result<bool> check_objects(const std::vector<AuditObject>& objects, bool packed_allowed) {
   for (std::size_t i = 0; i < objects.size(); ++i) {
     const std::string field = "objects[" + std::to_string(i) + "]";
-    if (!objects[i].mesh) return invalid_argument(field + ".mesh", "is missing");
+    if (!objects[i].mesh && !(packed_allowed && objects[i].packed)) return invalid_argument(field + ".mesh", "is missing");
+    if (objects[i].mesh && objects[i].packed) return invalid_argument(field + ".packed", "is given beside a mesh in memory");
+    if (objects[i].packed && (objects[i].packed->triangles == 0 || objects[i].packed->bounds.empty()))
+      return invalid_argument(field + ".packed", "describes no triangles");
     if (!objects[i].pose.is_finite() || !objects[i].pose.is_rigid()) return invalid_argument(field + ".pose", "must be a finite rigid transform");
     if (!(objects[i].surface_deviation_mm >= 0.0 && objects[i].surface_deviation_mm <= 1000.0))
       return invalid_argument(field + ".surface_deviation_mm", "must be in [0, 1000] mm");
   }
   return true;
+}
+
+Aabb local_bounds(const AuditObject& object) { return object.mesh ? object.mesh->root_bounds() : object.packed->bounds; }
+
+std::size_t triangle_count(const AuditObject& object) {
+  return object.mesh ? object.mesh->mesh().triangle_count() : object.packed->triangles;
 }
 
 int matching_rule(const std::vector<ContactRule>& rules, const AuditObject& a, const AuditObject& b) {
@@ -143,8 +155,8 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
   result.objects = objects.size();
   std::vector<Aabb> boxes(objects.size());
   for (std::size_t i = 0; i < objects.size(); ++i) {
-    boxes[i] = transformed_box(objects[i].mesh->root_bounds(), objects[i].pose);
-    result.triangles += objects[i].mesh->mesh().triangle_count();
+    boxes[i] = transformed_box(local_bounds(objects[i]), objects[i].pose);
+    result.triangles += triangle_count(objects[i]);
   }
   result.times.boxes_s = seconds_since(t0);
 
@@ -253,7 +265,7 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
   // A pair's estimated cost: both meshes' triangles. Each tile's sum, skipped tiles included, so
   // that every process of a distributed audit plans the same.
   auto pair_cost = [&](const IndexPair& p) {
-    return static_cast<double>(objects[p.first].mesh->mesh().triangle_count() + objects[p.second].mesh->mesh().triangle_count());
+    return static_cast<double>(triangle_count(objects[p.first]) + triangle_count(objects[p.second]));
   };
   std::vector<double>& tile_cost = result.tile_costs;
   tile_cost.assign(result.tiles, 0.0);
@@ -280,62 +292,95 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
   // ---- narrow phase: tile by tile, the costliest tiles and pairs first ----
   const auto t_narrow = Clock::now();
   auto cost = [&](std::size_t i) { return pair_cost(work[i]); };
-  std::vector<std::size_t> tile_left(result.tiles, 0);  // pairs not yet done, per tile
-  for (std::size_t t : work_tile) ++tile_left[t];
   if (options.broad_phase_only) {
     result.times.total_s = seconds_since(t0);
     return result;
   }
-  std::vector<std::size_t> order(work.size());
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t l, std::size_t r) {
-    const std::size_t tl = work_tile[l], tr = work_tile[r];
-    if (tl != tr) return tile_cost[tl] != tile_cost[tr] ? tile_cost[tl] > tile_cost[tr] : tl < tr;
-    return cost(l) > cost(r);
-  });
-  // Each tile's work indices, for handing over its clashes when it is done.
-  std::vector<std::vector<std::size_t>> tile_work(options.on_tile_done ? result.tiles : 0);
+  // Tiles in memory: the costliest first. Out of core: in floor-plan order, so that a tile's
+  // neighbours, which share its ghosts, follow it while those meshes are held.
+  bool out_of_core = false;
+  for (const AuditObject& o : objects) out_of_core = out_of_core || o.packed.has_value();
+  std::vector<TileScheduler::Tile> tiles(result.tiles);
+  for (std::size_t t = 0; t < tiles.size(); ++t) tiles[t].id = t;
+  for (std::size_t i = 0; i < work.size(); ++i) tiles[work_tile[i]].pairs.push_back(i);  // in (a, b) order
+  // Each tile's work indices in (a, b) order, for handing over its clashes when it is done.
+  std::vector<std::vector<std::size_t>> tile_work;
   if (options.on_tile_done)
-    for (std::size_t i = 0; i < work.size(); ++i) tile_work[work_tile[i]].push_back(i);
+    for (const TileScheduler::Tile& t : tiles) tile_work.push_back(t.pairs);
+  for (TileScheduler::Tile& t : tiles)
+    std::stable_sort(t.pairs.begin(), t.pairs.end(), [&](std::size_t l, std::size_t r) { return cost(l) > cost(r); });
+  if (!out_of_core)
+    std::stable_sort(tiles.begin(), tiles.end(), [&](const TileScheduler::Tile& l, const TileScheduler::Tile& r) {
+      return tile_cost[l.id] > tile_cost[r.id];
+    });
+  TileScheduler::Setup setup;
+  setup.tiles = std::move(tiles);
+  setup.work = &work;
+  setup.budget_bytes = options.memory_budget_bytes;
+  for (const AuditObject& o : objects) {
+    setup.in_memory.push_back(o.mesh);
+    // Held in memory: the pack's arrays plus the tree-ordered copy of the corners (about 24
+    // bytes per triangle); the file's bytes are read through a buffer of their size.
+    setup.bytes.push_back(o.packed ? o.packed->bytes + 24 * static_cast<std::uint64_t>(o.packed->triangles) : 0);
+    setup.file_bytes.push_back(o.packed ? o.packed->bytes : 0);
+  }
+  setup.loader = [&objects](std::uint32_t i) { return read_packed_mesh(*objects[i].packed); };
+  TileScheduler scheduler(std::move(setup));
   std::vector<PairClash> slots(work.size());
   std::vector<char> state(work.size(), 0);  // 0 not done, 1 done no clash, 2 clash
   progress.pairs_total = work.size() + done_before;
   progress.pairs_done = done_before;
   report(true);
   std::atomic<std::size_t> done{done_before}, clashes{0};
-  parallel_for(order.size(), options.threads, [&](std::size_t k) {
-    if (options.cancel && options.cancel->load()) return;
-    const std::size_t i = order[k];
-    PairClash& c = slots[i];
-    c.a = work[i].first;
-    c.b = work[i].second;
-    const bool clash = audit_pair(objects[c.a], objects[c.b], options, c);
-    state[i] = clash ? 2 : 1;
-    ++done;
-    if (clash) ++clashes;
-    if (clash && options.on_clash) {
-      std::lock_guard<std::mutex> lock(report_mutex);
-      options.on_clash(c);
-    }
-    if (options.on_tile_done) {
-      std::lock_guard<std::mutex> lock(report_mutex);
-      const std::size_t t = work_tile[i];
-      if (--tile_left[t] == 0) {
-        std::vector<PairClash> found;
-        for (std::size_t j : tile_work[t])  // in (a, b) order: the tile's work was listed so
-          if (state[j] == 2) found.push_back(slots[j]);
-        options.on_tile_done(t, found);
+  auto worker = [&] {
+    while (auto assigned = scheduler.next(options.cancel)) {
+      const std::size_t i = assigned->work_index;
+      PairClash& c = slots[i];
+      c.a = work[i].first;
+      c.b = work[i].second;
+      bool clash = true;
+      if (!assigned->error.empty()) {  // a mesh could not be read: the pair is undecided, a clash
+        c.verdict = Verdict::kInconclusive;
+        c.inconclusive_reason = InconclusiveReason::kPairFailed;
+        c.error = assigned->error;
+      } else {
+        clash = audit_pair(objects[c.a], *assigned->a, objects[c.b], *assigned->b, options, c);
       }
-    }
-    if (options.on_progress) {
-      {
+      state[i] = clash ? 2 : 1;
+      ++done;
+      if (clash) ++clashes;
+      if (clash && options.on_clash) {
         std::lock_guard<std::mutex> lock(report_mutex);
-        progress.pairs_done = done;
-        progress.clashes = clashes;
+        options.on_clash(c);
       }
-      report(false);
+      if (const auto t = scheduler.finish(i); t && options.on_tile_done) {
+        std::vector<PairClash> found;
+        for (std::size_t j : tile_work[*t])
+          if (state[j] == 2) found.push_back(slots[j]);
+        std::lock_guard<std::mutex> lock(report_mutex);
+        options.on_tile_done(*t, found);
+      }
+      if (options.on_progress) {
+        {
+          std::lock_guard<std::mutex> lock(report_mutex);
+          progress.pairs_done = done;
+          progress.clashes = clashes;
+        }
+        report(false);
+      }
     }
-  });
+  };
+  {
+    std::vector<std::thread> pool;
+    for (int t = 1; t < options.threads; ++t) pool.emplace_back(worker);
+    worker();
+    for (std::thread& t : pool) t.join();
+  }
+  const TileScheduler::Stats io = scheduler.stats();
+  result.bytes_read = io.bytes_read;
+  result.meshes_read = io.meshes_read;
+  result.peak_held_bytes = io.peak_held_bytes;
+  result.tiles_over_budget = io.tiles_over_budget;
   for (std::size_t i = 0; i < work.size(); ++i)
     if (state[i] == 2) result.clashes.push_back(std::move(slots[i]));
   sort_in_pair_order(result.clashes);  // tile order is not (a, b) order when the tiles are several

@@ -15,6 +15,7 @@
 #pragma once
 
 #include "kernel/core/direction.h"
+#include "engine/parts/packed_mesh_file.h"
 #include "engine/verdicts/contact_place.h"
 #include "kernel/query/contact_verdict.h"
 #include "kernel/bvh/mesh_bvh.h"
@@ -40,11 +41,18 @@ struct AuditObject {
   // deflection, 0 for a mesh. A pair is reported up to the clearance plus both deviations, for the
   // layer above to decide on the exact geometry (the triangles cannot tell within that window).
   double surface_deviation_mm = 0.0;
+  // Or, without `mesh`, the mesh on disk, read when a tile needs it and released after (out of core; audits only).
+  std::optional<PackedMeshFile> packed = std::nullopt;
 };
 
-// Every object has a mesh, a finite rigid pose and a surface deviation in [0, 1000] mm; an error
-// names objects[i] and the field otherwise (the audit's and the layout session's check).
-Result<bool> check_objects(const std::vector<AuditObject>& objects);
+// Every object has a mesh (in memory, or on disk where `packed_allowed`), a finite rigid pose and
+// a surface deviation in [0, 1000] mm; an error names objects[i] and the field otherwise (the
+// audit's and the layout session's check).
+Result<bool> check_objects(const std::vector<AuditObject>& objects, bool packed_allowed);
+
+// The object's mesh bounds in its own frame and its triangle count, whether in memory or on disk.
+Aabb local_bounds(const AuditObject& object);
+std::size_t triangle_count(const AuditObject& object);
 
 // An intended contact (seed 004 §6: parts bolted together, pins in holes): matching pairs are left
 // out of the narrow phase and counted as excluded.
@@ -101,6 +109,9 @@ struct AuditOptions {
   // Tiles a checkpoint holds: their pairs are not computed again and their clashes are not in the
   // result (the caller adds the checkpoint's); they count as done.
   std::vector<std::size_t> skip_tiles;
+  // Out of core: the most bytes of meshes read from disk (objects given `packed`) held at once; 0:
+  // no limit. With packed objects, tiles are worked on in floor-plan order (engine/audits/tile_scheduler).
+  std::uint64_t memory_budget_bytes = 0;
   // Stop after the broad phase: the result has the tiles, the candidate pairs and each tile's
   // cost, and no clash (how a distributed audit plans which process takes which tiles).
   bool broad_phase_only = false;
@@ -120,6 +131,10 @@ struct AuditResult {
   std::vector<double> tile_costs;
   bool cancelled = false;                // then clashes cover the pairs_done pairs finished
   AuditTimes times;
+  // Out of core: the bytes of packs read and how many, the most held at once (estimated in-memory
+  // bytes), and the tiles admitted beyond the budget because nothing else was running.
+  std::uint64_t bytes_read = 0, meshes_read = 0, peak_held_bytes = 0;
+  std::size_t tiles_over_budget = 0;
 };
 
 Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const AuditOptions& options);

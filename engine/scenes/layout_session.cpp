@@ -49,7 +49,7 @@ Result<std::unique_ptr<LayoutSession>> LayoutSession::create(std::vector<AuditOb
                                                              double clearance_mm) {
   if (moving >= objects.size()) return invalid_argument("moving", "no object " + std::to_string(moving));
   if (!std::isfinite(clearance_mm) || clearance_mm < 0.0) return invalid_argument("clearance_mm", "must be a finite, non-negative distance");
-  if (auto bad = check_objects(objects); !bad.ok()) return bad.error();
+  if (auto bad = check_objects(objects, false); !bad.ok()) return bad.error();
   std::unique_ptr<LayoutSession> s(new LayoutSession());
   s->objects_ = std::move(objects);
   s->moving_ = moving;

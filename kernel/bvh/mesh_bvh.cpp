@@ -7,6 +7,7 @@
 #include <cstring>
 #include <limits>
 #include <string>
+#include <type_traits>
 
 namespace gk {
 
@@ -33,26 +34,65 @@ Result<std::shared_ptr<MeshBvh>> MeshBvh::build(std::shared_ptr<const TriangleMe
 void MeshBvh::order_triangles() {
   const auto& faces = mesh_->faces();
   const auto& vertices = mesh_->vertices();
+  // In tree order already: the triangles in leaf order and the vertices numbered by first use.
+  bool in_order = true;
+  std::uint32_t next_vertex = 0;
+  for (std::size_t k = 0; k < ordered_to_mesh_.size() && in_order; ++k) {
+    if (ordered_to_mesh_[k] != k) in_order = false;
+    for (std::uint32_t v : faces[k]) {
+      if (v > next_vertex) in_order = false;
+      if (v == next_vertex) ++next_vertex;
+    }
+  }
+  if (in_order) {
+    ordered_faces_.clear();
+    ordered_faces_.shrink_to_fit();
+    ordered_vertices_.clear();
+    ordered_vertices_.shrink_to_fit();
+    faces_in_order_ = faces.data();
+    vertices_in_order_ = vertices.data();
+    return;
+  }
   constexpr std::uint32_t kUnset = std::numeric_limits<std::uint32_t>::max();
   std::vector<std::uint32_t> renumbered(vertices.size(), kUnset);
-  ordered_faces_.resize(ordered_to_mesh_.size());
+  ordered_faces_.clear();
+  ordered_faces_.reserve(ordered_to_mesh_.size());
   ordered_vertices_.clear();
   ordered_vertices_.reserve(vertices.size());
   for (std::size_t k = 0; k < ordered_to_mesh_.size(); ++k) {
     const TriangleMesh::Face& f = faces[ordered_to_mesh_[k]];
+    TriangleMesh::Face& ordered = ordered_faces_.emplace_back();
     for (int c = 0; c < 3; ++c) {
       std::uint32_t& r = renumbered[f[c]];
       if (r == kUnset) {
         r = static_cast<std::uint32_t>(ordered_vertices_.size());
         ordered_vertices_.push_back(vertices[f[c]]);
       }
-      ordered_faces_[k][c] = r;
+      ordered[c] = r;
     }
   }
   ordered_vertices_.shrink_to_fit();
+  faces_in_order_ = ordered_faces_.data();
+  vertices_in_order_ = ordered_vertices_.data();
+}
+
+std::shared_ptr<MeshBvh> MeshBvh::in_tree_order() const {
+  std::shared_ptr<MeshBvh> copy(new MeshBvh());
+  copy->mesh_ = std::make_shared<const TriangleMesh>(mesh_->in_face_order(ordered_to_mesh_));
+  copy->nodes_ = nodes_;
+  copy->depth_ = depth_;
+  copy->ordered_to_mesh_.resize(ordered_to_mesh_.size());
+  for (std::size_t k = 0; k < ordered_to_mesh_.size(); ++k) copy->ordered_to_mesh_[k] = static_cast<std::uint32_t>(k);
+  copy->order_triangles();
+  return copy;
 }
 
 void MeshBvh::reload_vertices() {
+  if (ordered_faces_.empty()) {  // the mesh is in tree order: its own arrays are read
+    faces_in_order_ = mesh_->faces().data();
+    vertices_in_order_ = mesh_->vertices().data();
+    return;
+  }
   const auto& faces = mesh_->faces();
   const auto& vertices = mesh_->vertices();
   for (std::size_t k = 0; k < ordered_to_mesh_.size(); ++k) {
@@ -73,7 +113,7 @@ void put(std::string& out, const T& value) {
 }
 
 template <typename T>
-bool take(const std::string& in, std::size_t& at, T& value) {
+bool take(std::string_view in, std::size_t& at, T& value) {
   if (in.size() - at < sizeof(T)) return false;
   std::memcpy(&value, in.data() + at, sizeof(T));
   at += sizeof(T);
@@ -98,7 +138,7 @@ std::string MeshBvh::serialize() const {
   return out;
 }
 
-Result<std::shared_ptr<MeshBvh>> MeshBvh::deserialize(std::shared_ptr<const TriangleMesh> mesh, const std::string& bytes) {
+Result<std::shared_ptr<MeshBvh>> MeshBvh::deserialize(std::shared_ptr<const TriangleMesh> mesh, std::string_view bytes) {
   if (!mesh) return invalid_argument("mesh", "no mesh given");
   auto bad = [](const std::string& why) { return invalid_argument("bytes", why); };
   if (bytes.size() < sizeof kSerialMagic || std::memcmp(bytes.data(), kSerialMagic, sizeof kSerialMagic) != 0)
@@ -115,13 +155,22 @@ Result<std::shared_ptr<MeshBvh>> MeshBvh::deserialize(std::shared_ptr<const Tria
   if (bytes.size() - at != need) return bad("wrong length");
   std::shared_ptr<MeshBvh> bvh(new MeshBvh());
   bvh->mesh_ = std::move(mesh);
-  bvh->nodes_.resize(static_cast<std::size_t>(nodes));
+  // Copied whole (no zeroing pass first): element by element when the bytes are aligned (a
+  // mapped pack), else as bytes. BvhNode and the indices are plain data.
+  auto copy_array = [&](auto& values, std::size_t count) {
+    using T = typename std::decay_t<decltype(values)>::value_type;
+    const char* first = bytes.data() + at;
+    if (reinterpret_cast<std::uintptr_t>(first) % alignof(T) == 0) {
+      values.assign(reinterpret_cast<const T*>(first), reinterpret_cast<const T*>(first) + count);
+    } else {
+      values.resize(count);
+      std::memcpy(values.data(), first, count * sizeof(T));
+    }
+    at += count * sizeof(T);
+  };
+  copy_array(bvh->nodes_, static_cast<std::size_t>(nodes));
   for (int i = 0; i < nodes; ++i) {
-    BvhNode& n = bvh->nodes_[static_cast<std::size_t>(i)];
-    for (float& v : n.lo) take(bytes, at, v);
-    for (float& v : n.hi) take(bytes, at, v);
-    take(bytes, at, n.index);
-    take(bytes, at, n.count);
+    const BvhNode& n = bvh->nodes_[static_cast<std::size_t>(i)];
     // Infinite bounds would hold every triangle but make centres NaN, and a NaN test rejects.
     for (int a = 0; a < 3; ++a)
       if (!std::isfinite(n.lo[a]) || !std::isfinite(n.hi[a])) return bad("node " + std::to_string(i) + " has a non-finite box");
@@ -131,10 +180,9 @@ Result<std::shared_ptr<MeshBvh>> MeshBvh::deserialize(std::shared_ptr<const Tria
              : (n.index <= i + 1 || n.index >= nodes || i + 1 >= nodes))
       return bad("node " + std::to_string(i) + " points outside the tree");
   }
-  bvh->ordered_to_mesh_.resize(n_tri);
+  copy_array(bvh->ordered_to_mesh_, n_tri);
   std::vector<char> seen(n_tri, 0);
-  for (std::uint32_t& k : bvh->ordered_to_mesh_) {
-    take(bytes, at, k);
+  for (std::uint32_t k : bvh->ordered_to_mesh_) {
     if (k >= n_tri || seen[k]) return bad("the triangle order is not a permutation");
     seen[k] = 1;
   }

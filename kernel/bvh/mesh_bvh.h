@@ -15,6 +15,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace gk {
@@ -38,7 +39,12 @@ class MeshBvh {
   // The tree as bytes (nodes, depth, triangle order), and back onto the same mesh without the
   // build. Loading checks every index, so damaged bytes are an error, never a bad tree.
   std::string serialize() const;
-  static Result<std::shared_ptr<MeshBvh>> deserialize(std::shared_ptr<const TriangleMesh> mesh, const std::string& bytes);
+  static Result<std::shared_ptr<MeshBvh>> deserialize(std::shared_ptr<const TriangleMesh> mesh, std::string_view bytes);
+
+  // The same tree on a copy of the mesh renumbered in tree order (TriangleMesh::in_face_order):
+  // its tree-ordered corners are the mesh's own arrays, not a second copy. How packs store a mesh
+  // (kernel/bvh/mesh_pack), so reading one needs no reordering.
+  std::shared_ptr<MeshBvh> in_tree_order() const;
 
   // Recomputes every box bottom-up from the mesh's current vertices (same topology).
   void refit(std::shared_ptr<const TriangleMesh> moved_mesh);
@@ -57,15 +63,16 @@ class MeshBvh {
 
   // Tree-ordered triangle k: its corners and its index in the mesh.
   Triangle ordered_triangle(int k) const {
-    const TriangleMesh::Face& f = ordered_faces_[static_cast<std::size_t>(k)];
-    return {ordered_vertices_[f[0]], ordered_vertices_[f[1]], ordered_vertices_[f[2]]};
+    const TriangleMesh::Face& f = faces_in_order_[k];
+    return {vertices_in_order_[f[0]], vertices_in_order_[f[1]], vertices_in_order_[f[2]]};
   }
   std::uint32_t mesh_triangle_index(int k) const { return ordered_to_mesh_[k]; }
   bool ordered_is_degenerate(int k) const { return mesh_->is_degenerate(ordered_to_mesh_[k]); }
 
  private:
   MeshBvh() = default;
-  // The tree-ordered faces and vertex copy from ordered_to_mesh_ (after a build or a load).
+  // The tree-ordered faces and vertex copy from ordered_to_mesh_ (after a build or a load), or
+  // none when the mesh is in tree order already (then the mesh's arrays are used).
   void order_triangles();
   // The vertex copy again from the mesh's current vertices (after a refit).
   void reload_vertices();
@@ -75,6 +82,9 @@ class MeshBvh {
   std::vector<TriangleMesh::Face> ordered_faces_;  // into ordered_vertices_
   std::vector<Vec3> ordered_vertices_;             // the mesh's vertices in order of first use by the tree
   std::vector<std::uint32_t> ordered_to_mesh_;
+  // What ordered_triangle reads: the two vectors above, or the mesh's own arrays.
+  const TriangleMesh::Face* faces_in_order_ = nullptr;
+  const Vec3* vertices_in_order_ = nullptr;
   int depth_ = 0;
   mutable std::mutex oriented_box_mutex_;
   mutable bool oriented_box_fitted_ = false;

@@ -6,6 +6,8 @@
 #include "kernel/core/status.h"
 
 #include <cstdint>
+#include <string>
+#include <string_view>
 #include <vector>
 
 namespace gk {
@@ -55,6 +57,18 @@ class TriangleMesh {
   // Enclosed volume by the divergence theorem; meaningful only when is_closed_oriented().
   // Positive when the triangles wind counter-clockwise seen from outside.
   double signed_volume() const;
+
+  // The same mesh with its triangles in `order` (a permutation of the triangle indices) and its
+  // vertices renumbered in order of first use (unused ones dropped); the analysis is carried over,
+  // not redone (zero-area triangles listed by their new indices).
+  TriangleMesh in_face_order(const std::vector<std::uint32_t>& order) const;
+
+  // The mesh with what validation found, appended as bytes, and read back without analysing it
+  // again: for checksummed files of our own (kernel/bvh/mesh_pack). Reading checks the counts, the
+  // coordinates and every index, so no bytes make a mesh that reads outside its arrays; the stored
+  // topology report and degeneracy flags are taken as written. `in` is advanced past the mesh.
+  void append_bytes(std::string& out) const;
+  static Result<TriangleMesh> read_bytes(std::string_view& in);
 
   // Moves the vertices (same count) keeping the topology, for refit after deformation.
   Result<bool> set_vertices(std::vector<Vec3> vertices);

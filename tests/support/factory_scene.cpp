@@ -1,6 +1,7 @@
 #include "tests/support/factory_scene.h"
 
 #include "engine/parts/bvh_cache.h"
+#include "engine/parts/packed_mesh_file.h"
 #include "mesh_io/mesh_file_reader.h"
 #include "tests/support/random_meshes.h"
 #include "kernel/core/units.h"
@@ -8,7 +9,11 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <map>
+#include <sstream>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -45,6 +50,62 @@ std::shared_ptr<const MeshBvh> shared_mesh(const std::string& relative, double s
   for (Vec3& p : v) p += shift;
   (void)mesh.set_vertices(std::move(v));
   return bvh_of(std::move(mesh));
+}
+
+// A smooth displacement of up to `amplitude` mm on each axis, its own for each seed: a copy that is
+// its own content (a content-hash cache cannot share it), the same shape to the eye.
+TriangleMesh deformed(const TriangleMesh& mesh, std::uint64_t seed, double amplitude) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> phase(0.0, 2.0 * kPi), frequency(1.0 / 400.0, 1.0 / 40.0);
+  const Vec3 f(frequency(rng), frequency(rng), frequency(rng)), p0(phase(rng), phase(rng), phase(rng));
+  std::vector<Vec3> v = mesh.vertices();
+  for (Vec3& p : v)
+    p += amplitude * Vec3(std::sin(f.x() * p.y() + p0.x()), std::sin(f.y() * p.z() + p0.y()), std::sin(f.z() * p.x() + p0.z()));
+  // The same topology: the copy's analysis holds, only bounds and degeneracy are computed again.
+  TriangleMesh copy = mesh;
+  auto moved = copy.set_vertices(std::move(v));
+  if (!moved.ok()) throw std::runtime_error(moved.error().to_string());
+  return copy;
+}
+
+engine::PackedMeshFile pack(const MeshBvh& bvh, const std::string& dir) {
+  auto file = engine::write_packed_mesh(bvh, dir);
+  if (!file.ok()) throw std::runtime_error(file.error().to_string());
+  return file.value();
+}
+
+constexpr const char* kIndexName = "scene.index";
+constexpr const char* kIndexHeader = "gatekeeper-factory-index 1";
+
+// The scene's objects (every one packed) and rules, as text with round-trip doubles.
+void write_index(const FactoryScene& scene, const std::string& dir) {
+  const std::string path = dir + "/" + kIndexName, tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp);
+    char number[32];
+    auto put = [&](double v) {
+      std::snprintf(number, sizeof number, "%.17g", v);
+      out << '\t' << number;
+    };
+    out << kIndexHeader << "\nrules " << scene.rules.size() << "\n";
+    for (const engine::ContactRule& r : scene.rules)
+      out << r.name << '\t' << r.category_a << '\t' << r.category_b << '\t' << (r.same_group_only ? 1 : 0) << "\n";
+    out << "objects " << scene.objects.size() << "\n";
+    for (const AuditObject& o : scene.objects) {
+      out << o.name << '\t' << o.category << '\t' << (o.group.empty() ? "-" : o.group);
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) put(o.pose.rotation(i, j));
+      for (int i = 0; i < 3; ++i) put(o.pose.translation[i]);
+      put(o.surface_deviation_mm);
+      out << '\t' << std::filesystem::path(o.packed->path).filename().string();
+      for (int i = 0; i < 3; ++i) put(o.packed->bounds.min[i]);
+      for (int i = 0; i < 3; ++i) put(o.packed->bounds.max[i]);
+      out << '\t' << o.packed->triangles << '\t' << o.packed->bytes << "\n";
+    }
+    out << "end\n";
+    if (!out) throw std::runtime_error("cannot write " + tmp);
+  }
+  std::filesystem::rename(tmp, path);
 }
 
 class Builder {
@@ -162,6 +223,7 @@ FactoryScene generate_factory_scene(const FactorySceneOptions& options) {
                  {"bolts lying on conveyors", "bolt", "conveyor", false}};
   // Robot links and machines share the catalogue's meshes above; with distinct_meshes each gets
   // its own copy, built on every core.
+  // With pack_dir, each copy is written and released as soon as it is built.
   if (options.distinct_meshes) {
     std::vector<std::size_t> copies;
     for (std::size_t i = 0; i < scene.objects.size(); ++i)
@@ -170,7 +232,12 @@ FactoryScene generate_factory_scene(const FactorySceneOptions& options) {
     auto work = [&] {
       for (std::size_t k = next++; k < copies.size(); k = next++) {
         AuditObject& o = scene.objects[copies[k]];
-        o.mesh = bvh_of(o.mesh->mesh());
+        o.mesh = bvh_of(options.deformed ? deformed(o.mesh->mesh(), options.seed * 1000003ull + copies[k], options.deform_mm)
+                                         : o.mesh->mesh());
+        if (!options.pack_dir.empty()) {
+          o.packed = pack(*o.mesh, options.pack_dir);
+          o.mesh.reset();
+        }
       }
     };
     std::vector<std::thread> pool;
@@ -178,10 +245,80 @@ FactoryScene generate_factory_scene(const FactorySceneOptions& options) {
     work();
     for (std::thread& t : pool) t.join();
   }
-  std::map<const MeshBvh*, int> unique;
-  for (const AuditObject& o : scene.objects) unique[o.mesh.get()] = 1;
+  if (!options.pack_dir.empty()) {
+    std::map<const MeshBvh*, engine::PackedMeshFile> shared_packs;
+    for (AuditObject& o : scene.objects) {
+      if (!o.mesh) continue;
+      auto known = shared_packs.find(o.mesh.get());
+      if (known == shared_packs.end()) known = shared_packs.emplace(o.mesh.get(), pack(*o.mesh, options.pack_dir)).first;
+      o.packed = known->second;
+      o.mesh.reset();
+    }
+    write_index(scene, options.pack_dir);
+  }
+  std::map<std::string, int> unique;
+  for (const AuditObject& o : scene.objects) {
+    char pointer[32];
+    std::snprintf(pointer, sizeof pointer, "%p", static_cast<const void*>(o.mesh.get()));
+    unique[o.mesh ? pointer : o.packed->path] = 1;
+  }
   scene.unique_meshes = unique.size();
   g_cache = nullptr;
+  return scene;
+}
+
+Result<FactoryScene> read_factory_scene_index(const std::string& pack_dir) {
+  const std::string path = pack_dir + "/" + kIndexName;
+  std::ifstream in(path);
+  std::string line;
+  auto bad = [&](const std::string& why) { return invalid_argument(path, why); };
+  if (!in || !std::getline(in, line) || line != kIndexHeader) return bad("is not a factory scene index");
+  auto fields = [](const std::string& text) {
+    std::vector<std::string> out;
+    std::stringstream s(text);
+    for (std::string f; std::getline(s, f, '\t');) out.push_back(f);
+    return out;
+  };
+  FactoryScene scene;
+  std::size_t count = 0;
+  if (!std::getline(in, line) || std::sscanf(line.c_str(), "rules %zu", &count) != 1) return bad("has no rule count");
+  for (std::size_t k = 0; k < count; ++k) {
+    if (!std::getline(in, line)) return bad("ends inside the rules");
+    const auto f = fields(line);
+    if (f.size() != 4) return bad("has a malformed rule");
+    scene.rules.push_back({f[0], f[1], f[2], f[3] == "1"});
+  }
+  if (!std::getline(in, line) || std::sscanf(line.c_str(), "objects %zu", &count) != 1) return bad("has no object count");
+  for (std::size_t k = 0; k < count; ++k) {
+    if (!std::getline(in, line)) return bad("ends inside the objects");
+    const auto f = fields(line);
+    if (f.size() != 3 + 12 + 1 + 1 + 6 + 2) return bad("has a malformed object line " + std::to_string(k));
+    AuditObject o;
+    o.name = f[0];
+    o.category = f[1];
+    o.group = f[2] == "-" ? "" : f[2];
+    std::size_t at = 3;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) o.pose.rotation(i, j) = std::stod(f[at++]);
+    for (int i = 0; i < 3; ++i) o.pose.translation[i] = std::stod(f[at++]);
+    o.surface_deviation_mm = std::stod(f[at++]);
+    engine::PackedMeshFile file;
+    file.path = pack_dir + "/" + f[at++];
+    Vec3 lo, hi;
+    for (int i = 0; i < 3; ++i) lo[i] = std::stod(f[at++]);
+    for (int i = 0; i < 3; ++i) hi[i] = std::stod(f[at++]);
+    file.bounds.extend(lo);
+    file.bounds.extend(hi);
+    file.triangles = std::stoull(f[at++]);
+    file.bytes = std::stoull(f[at++]);
+    scene.triangles += file.triangles;
+    o.packed = std::move(file);
+    scene.objects.push_back(std::move(o));
+  }
+  if (!std::getline(in, line) || line != "end") return bad("is incomplete");
+  std::map<std::string, int> unique;
+  for (const AuditObject& o : scene.objects) unique[o.packed->path] = 1;
+  scene.unique_meshes = unique.size();
   return scene;
 }
 

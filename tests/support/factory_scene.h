@@ -25,8 +25,17 @@ struct FactorySceneOptions {
   // Every robot link and machine gets its own mesh and BVH (a copy) instead of sharing one: the
   // cost of a scene without instancing.
   bool distinct_meshes = false;
+  // With distinct_meshes: each copy randomly deformed (a smooth displacement field of up to
+  // deform_mm, its own per object), so every copy is its own content, as in a real plant.
+  bool deformed = false;
+  double deform_mm = 0.5;
   // When set, BVHs are loaded from (and saved to) this engine/parts/bvh_cache directory.
   std::string bvh_cache_dir;
+  // When set, every object's mesh and tree are written to this directory as packs
+  // (engine/parts/packed_mesh_file) and the object is given `packed` instead of its mesh, which
+  // is released as soon as written (an out-of-core scene); an index of the scene is written
+  // beside them (read_factory_scene_index).
+  std::string pack_dir;
 };
 
 struct KnownPair {
@@ -43,7 +52,11 @@ struct FactoryScene {
   std::size_t triangles = 0;
 };
 
-// Throws std::runtime_error if a shared mesh cannot be read.
+// Throws std::runtime_error if a shared mesh cannot be read (or a pack cannot be written).
 FactoryScene generate_factory_scene(const FactorySceneOptions& options);
+
+// The scene a generation with pack_dir wrote, every object `packed` (no mesh read), or an error
+// when the directory holds no complete index.
+Result<FactoryScene> read_factory_scene_index(const std::string& pack_dir);
 
 }  // namespace gk::testing

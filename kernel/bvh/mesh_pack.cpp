@@ -1,0 +1,60 @@
+#include "kernel/bvh/mesh_pack.h"
+
+#include "kernel/core/content_hash.h"
+
+#include <cstring>
+
+namespace gk {
+namespace {
+
+constexpr char kPackMagic[8] = {'G', 'K', 'P', 'A', 'C', 'K', '0', '1'};
+constexpr std::size_t kChecksumBytes = 16;
+
+Hash128 checksum(std::string_view bytes) {
+  ContentHash h;
+  h.add_bytes(bytes.data(), bytes.size());
+  return h.value();
+}
+
+}  // namespace
+
+std::string pack_mesh_bvh(const MeshBvh& bvh) {
+  // In tree order, so the reader needs no reordering and keeps no second copy of the corners.
+  const std::shared_ptr<const MeshBvh> ordered = bvh.in_tree_order();
+  std::string mesh_bytes;
+  ordered->mesh().append_bytes(mesh_bytes);
+  const std::string tree_bytes = ordered->serialize();
+  std::string out(kPackMagic, sizeof kPackMagic);
+  out.reserve(sizeof kPackMagic + 8 + mesh_bytes.size() + tree_bytes.size() + kChecksumBytes);
+  const std::uint64_t mesh_size = mesh_bytes.size();
+  out.append(reinterpret_cast<const char*>(&mesh_size), sizeof mesh_size);
+  out += mesh_bytes;
+  out += tree_bytes;
+  const Hash128 sum = checksum(out);
+  out.append(reinterpret_cast<const char*>(&sum.low), 8);
+  out.append(reinterpret_cast<const char*>(&sum.high), 8);
+  return out;
+}
+
+Result<std::shared_ptr<MeshBvh>> unpack_mesh_bvh(std::string_view bytes) {
+  auto bad = [](const std::string& why) { return invalid_argument("packed mesh", why); };
+  if (bytes.size() < sizeof kPackMagic + 8 + kChecksumBytes || std::memcmp(bytes.data(), kPackMagic, sizeof kPackMagic) != 0)
+    return bad("not a packed mesh of this version");
+  const std::string_view body = bytes.substr(0, bytes.size() - kChecksumBytes);
+  Hash128 stored;
+  std::memcpy(&stored.low, bytes.data() + body.size(), 8);
+  std::memcpy(&stored.high, bytes.data() + body.size() + 8, 8);
+  if (checksum(body) != stored) return bad("the checksum does not match: the bytes are damaged");
+  std::uint64_t mesh_size = 0;
+  std::memcpy(&mesh_size, body.data() + sizeof kPackMagic, sizeof mesh_size);
+  std::string_view rest = body.substr(sizeof kPackMagic + sizeof mesh_size);
+  if (mesh_size > rest.size()) return bad("the mesh is longer than the block");
+  std::string_view mesh_bytes = rest.substr(0, static_cast<std::size_t>(mesh_size));
+  auto mesh = TriangleMesh::read_bytes(mesh_bytes);
+  if (!mesh.ok()) return mesh.error();
+  if (!mesh_bytes.empty()) return bad("the mesh's bytes have a tail");
+  return MeshBvh::deserialize(std::make_shared<const TriangleMesh>(std::move(mesh).value()),
+                              rest.substr(static_cast<std::size_t>(mesh_size)));
+}
+
+}  // namespace gk
