@@ -120,7 +120,9 @@ Result<MoveOutcome> Engine::move_object(const std::string& scene_id, const std::
   const StoredPose& pose = checked.value();
   if (auto bad = check_clearance(clearance_mm); !bad.ok()) return bad.error();
   std::optional<SceneObjectRecord> previous;
-  auto moved = scenes_.move(scene_id, object_id, pose, &previous);
+  // A drag's frames are logged, not synced one by one (engine/scenes/scene_store's WriteDurability);
+  // end_drag syncs them.
+  auto moved = scenes_.move(scene_id, object_id, pose, &previous, drag ? WriteDurability::kLogged : WriteDurability::kSynced);
   if (!moved.ok()) return moved.error();
   if (!drag) return answer_stored_edit(scene_id, moved.value(), previous, clearance_mm, stop);
   // A drag's session stays valid while the scene's version advances by this stream's own moves
@@ -152,6 +154,8 @@ Result<MoveOutcome> Engine::answer_stored_edit(const std::string& scene_id, cons
   if (!outcome.ok()) (void)scenes_.revert(scene_id, stored, previous);
   return outcome;
 }
+
+Result<bool> Engine::end_drag() { return scenes_.sync(); }
 
 Result<SceneRecord> Engine::delete_object(const std::string& scene_id, const std::string& object_id) {
   return scenes_.remove(scene_id, object_id);

@@ -75,9 +75,12 @@ class Engine {
   Result<std::vector<SceneObjectRecord>> put_objects(const std::string& scene_id, std::vector<SceneObjectRecord> objects);
   // Poses are checked here (engine::checked_pose), whoever calls.
   // Stores the pose, then answers the contacts at it (through the drag's session when there is
-  // one); taken back when the answer fails.
+  // one); taken back when the answer fails. A drag's poses are logged, not synced one by one
+  // (they survive the daemon being killed; WriteDurability in engine/scenes/scene_store).
   Result<MoveOutcome> move_object(const std::string& scene_id, const std::string& object_id, const StoredPose& pose,
                                   double clearance_mm, DragSession* drag = nullptr, const StopToken& stop = {});
+  // A drag ended: every pose it logged is synced to the disk.
+  Result<bool> end_drag();
   Result<SceneRecord> delete_object(const std::string& scene_id, const std::string& object_id);
 
   // --- audits

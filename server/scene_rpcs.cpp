@@ -8,6 +8,7 @@
 #include "server/proto_convert.h"
 #include "server/rpc_helpers.h"
 
+#include <atomic>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -58,12 +59,21 @@ class DragReactor final : public grpc::ServerBidiReactor<pb::MoveObjectRequest, 
     const StopToken stop([this] { return ctx_->IsCancelled() || past_deadline(ctx_); });
     const grpc::Status s = guarded_status(frame, [&] { return service_.move(request_, &reply_, &session_, stop); });
     service_.stats().record(frame.method, us_since(frame.t0), !s.ok());
+    moved_ = true;
     if (!s.ok()) return end(s);
     StartWrite(&reply_);
   }
+  // The frames' poses were logged, not synced one by one: the stream ends once they are on disk.
   void end(const grpc::Status& status) {
-    end_call(service_.stats(), call_, status);
-    Finish(status);
+    grpc::Status final_status = status;
+    if (moved_) {
+      auto synced = service_.engine().end_drag();
+      if (!synced.ok() && status.ok())
+        final_status = {grpc::StatusCode::UNAVAILABLE, "DragObject: the drag's poses could not be synced to disk: " +
+                                                           synced.error().to_string()};
+    }
+    end_call(service_.stats(), call_, final_status);
+    Finish(final_status);
   }
 
   GatekeeperService& service_;
@@ -72,6 +82,7 @@ class DragReactor final : public grpc::ServerBidiReactor<pb::MoveObjectRequest, 
   pb::MoveObjectRequest request_;
   pb::MoveResult reply_;
   DragSession session_;
+  std::atomic<bool> moved_{false};  // a frame was stored (logged): the end syncs
 };
 
 SceneObjectRecord to_record(const pb::SceneObject& in) {

@@ -184,7 +184,7 @@ Result<std::vector<SceneObjectRecord>> SceneStore::put_many(const std::string& s
 }
 
 Result<SceneObjectRecord> SceneStore::move(const std::string& scene_id, const std::string& object_id, const StoredPose& pose,
-                                           std::optional<SceneObjectRecord>* previous) {
+                                           std::optional<SceneObjectRecord>* previous, WriteDurability durability) {
   std::lock_guard<std::mutex> lock(mutex_);
   auto it = scenes_.find(scene_id);
   if (it == scenes_.end()) return Error{ErrorCode::kNotFound, "scene_id", "no scene '" + scene_id + "'"};
@@ -193,11 +193,24 @@ Result<SceneObjectRecord> SceneStore::move(const std::string& scene_id, const st
   if (previous) *previous = ob->second;
   SceneObjectRecord moved = ob->second;
   moved.pose = pose;
+  // The connection's sync level is switched for this one write (the store's mutex is held).
+  const bool logged = durability == WriteDurability::kLogged;
+  if (logged) sqlite3_exec(db_, "PRAGMA synchronous=NORMAL", nullptr, nullptr, nullptr);
   auto written = write_object(scene_id, moved);
+  if (logged) sqlite3_exec(db_, "PRAGMA synchronous=FULL", nullptr, nullptr, nullptr);
   if (!written.ok()) return written.error();
   ob->second = moved;
   ++it->second.version;
   return moved;
+}
+
+Result<bool> SceneStore::sync() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  // A checkpoint syncs the write-ahead log before it copies pages back (synchronous=FULL): every
+  // logged frame is then on the disk. PASSIVE: it never waits for readers.
+  if (sqlite3_wal_checkpoint_v2(db_, nullptr, SQLITE_CHECKPOINT_PASSIVE, nullptr, nullptr) != SQLITE_OK)
+    return storage_error("cannot sync the scene database's log");
+  return true;
 }
 
 Result<bool> SceneStore::delete_object(const std::string& scene_id, const std::string& object_id) {

@@ -36,6 +36,12 @@ struct SceneRecord {
   std::uint64_t version = 0;  // in memory: counts the changes since the daemon started
 };
 
+// When a stored change counts as kept. A drag's frames are logged: committed to the database's
+// write-ahead log without waiting for the disk, so they survive the daemon being killed (the log
+// is in the system's buffers) but the last ones may be lost to a power cut until the next synced
+// write or sync(); the drag's end syncs. Every other change is synced before it is answered.
+enum class WriteDurability { kSynced, kLogged };
+
 class SceneStore {
  public:
   static Result<std::unique_ptr<SceneStore>> open(const std::string& directory);
@@ -55,7 +61,10 @@ class SceneStore {
   // All or nothing, in one transaction; returns the stored objects (with their ids) in order.
   Result<std::vector<SceneObjectRecord>> put_many(const std::string& scene_id, std::vector<SceneObjectRecord> objects);
   Result<SceneObjectRecord> move(const std::string& scene_id, const std::string& object_id, const StoredPose& pose,
-                                 std::optional<SceneObjectRecord>* previous = nullptr);
+                                 std::optional<SceneObjectRecord>* previous = nullptr,
+                                 WriteDurability durability = WriteDurability::kSynced);
+  // Every change logged so far is on the disk when this returns (the log synced).
+  Result<bool> sync();
   // Takes back an edit whose answer failed: the object returns to `previous` (or goes, when it
   // was new) only if it is still exactly as that edit stored it (a later edit is kept). Returns
   // whether it was taken back.

@@ -21,15 +21,19 @@ Hash128 checksum(std::string_view bytes) {
 std::string pack_mesh_bvh(const MeshBvh& bvh) {
   // In tree order, so the reader needs no reordering and keeps no second copy of the corners.
   const std::shared_ptr<const MeshBvh> ordered = bvh.in_tree_order();
-  std::string mesh_bytes;
-  ordered->mesh().append_bytes(mesh_bytes);
-  const std::string tree_bytes = ordered->serialize();
-  std::string out(kPackMagic, sizeof kPackMagic);
-  out.reserve(sizeof kPackMagic + 8 + mesh_bytes.size() + tree_bytes.size() + kChecksumBytes);
-  const std::uint64_t mesh_size = mesh_bytes.size();
-  out.append(reinterpret_cast<const char*>(&mesh_size), sizeof mesh_size);
-  out += mesh_bytes;
-  out += tree_bytes;
+  const TriangleMesh& mesh = ordered->mesh();
+  // One buffer, sized up front: a pack of millions of triangles is not copied while it grows.
+  const std::size_t estimate = 256 + mesh.vertices().size() * sizeof(Vec3) + mesh.triangle_count() * (12 + 1 + 4 + 4) +
+                               mesh.body_seeds().size() * 4 + static_cast<std::size_t>(ordered->node_count()) * sizeof(BvhNode);
+  std::string out;
+  out.reserve(estimate);
+  out.append(kPackMagic, sizeof kPackMagic);
+  const std::size_t size_at = out.size();
+  out.append(8, '\0');
+  mesh.append_bytes(out);
+  const std::uint64_t mesh_size = out.size() - size_at - 8;
+  std::memcpy(out.data() + size_at, &mesh_size, sizeof mesh_size);
+  out += ordered->serialize();
   const Hash128 sum = checksum(out);
   out.append(reinterpret_cast<const char*>(&sum.low), 8);
   out.append(reinterpret_cast<const char*>(&sum.high), 8);

@@ -126,6 +126,68 @@ TEST(ScenesE2E, PutMoveDragDeleteAndTheSceneSurvivesARestart) {
   EXPECT_EQ(scene.objects_size(), 1);
 }
 
+// A drag's frames are logged rather than synced one by one: every frame answered must still be
+// stored when the daemon is killed in the middle of the drag (the stream never ended, so the end's
+// sync never ran), and a drag that ends is answered OK after its sync.
+TEST(ScenesE2E, ADragsAnsweredFramesSurviveAKillInTheMiddleOfTheDrag) {
+  const std::string dir = testing::temp_dir("drag-kill");
+  std::string scene_id, a, b;
+  const int frames = 300;
+  {
+    Daemon daemon(dir);
+    auto stub = daemon.stub();
+    const std::string box = testing::upload_part_id(*stub, testing::box_obj(0, 0, 0, 100, 100, 100), "obj");
+    grpc::ClientContext cctx;
+    pb::CreateSceneRequest create;
+    create.set_name("drag");
+    pb::SceneInfo scene;
+    ASSERT_TRUE(stub->CreateScene(&cctx, create, &scene).ok());
+    scene_id = scene.scene_id();
+    put(*stub, scene_id, box, "still", 0.0, &a);
+    put(*stub, scene_id, box, "dragged", 5000.0, &b);
+    pb::MoveObjectRequest move;
+    move.set_scene_id(scene_id);
+    move.set_object_id(b);
+    {  // a finished drag: OK once synced
+      grpc::ClientContext dctx;
+      auto drag = stub->DragObject(&dctx);
+      for (int i = 0; i < 20; ++i) {
+        *move.mutable_pose() = at_x(4000.0 + i);
+        ASSERT_TRUE(drag->Write(move));
+        pb::MoveResult r;
+        ASSERT_TRUE(drag->Read(&r));
+      }
+      drag->WritesDone();
+      EXPECT_TRUE(drag->Finish().ok());
+    }
+    grpc::ClientContext dctx;
+    auto drag = stub->DragObject(&dctx);
+    for (int i = 0; i < frames; ++i) {
+      const double x = 3000.0 - 10.0 * i;  // into the still box (x in [0, 100]) at the end
+      *move.mutable_pose() = at_x(x);
+      ASSERT_TRUE(drag->Write(move));
+      pb::MoveResult r;
+      ASSERT_TRUE(drag->Read(&r));
+      EXPECT_EQ(r.verdict(), x < 100.0 ? pb::COLLISION : x == 100.0 ? pb::TOUCHING : pb::CLEAR) << "frame " << i;
+    }
+    EXPECT_EQ(daemon.stop(SIGKILL), -SIGKILL);  // mid-drag: the stream is still open
+  }
+  Daemon daemon(dir);
+  auto stub = daemon.stub();
+  grpc::ClientContext gctx;
+  pb::GetSceneRequest get;
+  get.set_scene_id(scene_id);
+  pb::SceneInfo scene;
+  ASSERT_TRUE(stub->GetScene(&gctx, get, &scene).ok());
+  bool found = false;
+  for (const auto& o : scene.objects())
+    if (o.object_id() == b) {
+      found = true;
+      EXPECT_DOUBLE_EQ(o.pose().translation().x_mm(), 3000.0 - 10.0 * (frames - 1));  // the last frame answered
+    }
+  EXPECT_TRUE(found);
+}
+
 TEST(ScenesE2E, AuditJobsReportWhatBruteForceFindsAndCancelKeepsPartialResults) {
   Daemon daemon(testing::temp_dir("audit"));
   auto stub = daemon.stub();
