@@ -33,4 +33,10 @@ struct PlacedScene {
 };
 Result<PlacedScene> place_scene(const SceneRecord& scene, PartRegistry& parts);
 
+// The same objects for an audit out of core: each distinct part is loaded once, written to pack_dir
+// as a pack (engine/parts/packed_mesh_file, kept there for later audits) and let go, and every
+// object names its part's pack instead of holding the mesh (`parts` are then empty). Only the
+// registry's own budget of parts is in memory while the packs are written.
+Result<PlacedScene> place_scene_packed(const SceneRecord& scene, PartRegistry& parts, const std::string& pack_dir);
+
 }  // namespace gk::engine

@@ -1,6 +1,7 @@
 // gatekeeper-audit: an audit of one scene spread over the processes of an MPI job.
 //
 //   mpiexec -n N gatekeeper-audit --data-dir DIR --scene SCENE --work-dir SHARED --out report.json
+//           [--memory-budget-gb G]   (out of core: meshes read from packs tile by tile)
 //
 // Every process opens the daemon's data directory for reading (scenes, parts, the BVH cache: on
 // storage all of them see), runs the same broad phase and so the same plan of tiles
@@ -138,6 +139,7 @@ int main(int argc, char** argv) {
   std::string data_dir, scene_id, work_dir, out_path;
   engine::AuditOptions asked;
   int threads = 1;
+  double memory_budget_gb = 0.0;
   app.add_option("--data-dir", data_dir, "the daemon's data directory (read only)")->required();
   app.add_option("--scene", scene_id, "the scene to audit")->required();
   app.add_option("--work-dir", work_dir, "a directory every process can write: finished tiles (the checkpoint)")->required();
@@ -147,6 +149,10 @@ int main(int argc, char** argv) {
   app.add_option("--threads", threads, "threads per process");
   app.add_flag("--compute-depth", asked.compute_depth, "a penetration depth per colliding pair");
   app.add_flag("--compute-volume", asked.compute_volume, "the shared volume per colliding pair of closed meshes");
+  app.add_option("--memory-budget-gb", memory_budget_gb,
+                 "out of core: each part is written once as a pack beside the BVH cache, and each process holds at most "
+                 "this many GB of meshes at once, reading them tile by tile (0: every part in memory)")
+      ->check(CLI::Range(0.0, 1.0e6));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -177,9 +183,17 @@ int main(int argc, char** argv) {
   std::ofstream(work_dir + "/process-" + std::to_string(rank) + ".pid") << ::getpid() << "\n";
   auto store = engine::PartStore::open_read_only(data_dir);
   if (!store.ok()) return fail(rank, store.error().to_string());
-  engine::PartRegistry parts(*store.value(), data_dir + "/bvh-cache");
   const auto t_load = std::chrono::steady_clock::now();
-  auto placed = engine::place_scene(scene.value(), parts);
+  Result<engine::PlacedScene> placed = Error{};
+  if (memory_budget_gb > 0.0) {
+    // The registry exists only while the packs are written: its parts are gone before the audit.
+    const auto budget = static_cast<std::size_t>(memory_budget_gb * 1e9);
+    engine::PartRegistry parts(*store.value(), data_dir + "/bvh-cache", budget);
+    placed = engine::place_scene_packed(scene.value(), parts, data_dir + "/bvh-cache/packs");
+  } else {
+    engine::PartRegistry parts(*store.value(), data_dir + "/bvh-cache");
+    placed = engine::place_scene(scene.value(), parts);
+  }
   if (!placed.ok()) return fail(rank, placed.error().to_string());
   const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_load).count();
   const std::vector<engine::AuditObject>& objects = placed.value().objects;
@@ -195,6 +209,7 @@ int main(int argc, char** argv) {
   for (std::size_t t : plan[static_cast<std::size_t>(rank)]) mine[t] = 1;
 
   engine::AuditOptions run = options.value();
+  run.memory_budget_bytes = static_cast<std::uint64_t>(memory_budget_gb * 1e9);
   std::size_t resumed = 0;
   for (std::size_t t = 0; t < costs.size(); ++t) {
     const bool done = fs::exists(tile_path(work_dir, t));
@@ -218,7 +233,9 @@ int main(int argc, char** argv) {
   for (std::size_t t : plan[static_cast<std::size_t>(rank)]) my_cost += costs[t];
   std::ofstream(work_dir + "/process-" + std::to_string(rank) + ".json")
       << nlohmann::json{{"process", rank}, {"tiles", plan[static_cast<std::size_t>(rank)].size()}, {"tiles_computed", written},
-                        {"tiles_resumed", resumed}, {"estimated_cost", my_cost}, {"load_s", load_s}, {"audit_s", run_s}}
+                        {"tiles_resumed", resumed}, {"estimated_cost", my_cost}, {"load_s", load_s}, {"audit_s", run_s},
+                        {"packs_read", result.value().meshes_read}, {"pack_bytes_read", result.value().bytes_read},
+                        {"most_held_bytes", result.value().peak_held_bytes}}
              .dump()
       << "\n";
 

@@ -141,6 +141,30 @@ TEST(DistributedAuditE2E, OneTwoAndFourProcessesEqualTheDaemonsAudit) {
     }
     EXPECT_GT(computed, 4u);
   }
+  // Out of core: every part written once as a pack, meshes read tile by tile within a budget
+  // smaller than any tile (one tile at a time): the same report.
+  for (int processes : {1, 2}) {
+    const std::string work = dir + "/work-packed-" + std::to_string(processes);
+    const std::string out = dir + "/report-packed-" + std::to_string(processes) + ".json";
+    ASSERT_EQ(shell(mpiexec(processes, dir, scene, work, out, "--clearance-mm 20 --tile-mm 2500 --memory-budget-gb 0.000001")), 0)
+        << testing::read_file(work + ".log");
+    const nlohmann::json report = read_json(out);
+    expect_report_equals_daemons(report, daemon_report);
+    // A pack holds its mesh renumbered in tree order, so which of a pair's contacts stands for the
+    // clash (point_a, point_b) may differ; everything else is equal.
+    auto without_points = [](nlohmann::json clashes) {
+      for (auto& c : clashes) {
+        c.erase("point_a");
+        c.erase("point_b");
+      }
+      return clashes;
+    };
+    EXPECT_EQ(without_points(report["clashes"]), without_points(first["clashes"]));
+    std::size_t packs_read = 0;
+    for (const auto& p : report["per_process"]) packs_read += p["packs_read"].get<std::size_t>();
+    EXPECT_GT(packs_read, 0u);
+  }
+  EXPECT_TRUE(fs::is_directory(dir + "/bvh-cache/packs"));
   // The 1-process work directory belongs to that audit: another clearance there is refused.
   const std::string work = dir + "/work-1";
   EXPECT_NE(shell(mpiexec(1, dir, scene, work, dir + "/other.json", "--clearance-mm 25 --tile-mm 2500")), 0);
