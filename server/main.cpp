@@ -22,6 +22,7 @@
 #include "engine/gatekeeper_engine.h"
 #include "engine/parts/cad_sandbox.h"
 #include "server/access_control.h"
+#include "server/audit_handoff.h"
 #include "server/audit_archive.h"
 #include "server/audit_checkpoint_store.h"
 #include "server/clash_status_store.h"
@@ -68,6 +69,8 @@ struct Config {
   double cad_check_memory_gb = 8.0;
   double part_memory_gb = 8.0;
   int audits_in_memory = 16;
+  std::string audit_driver;              // empty: every audit runs in this process
+  double audit_driver_min_triangles = 1e7;
   int validation_workers = 2;
   int part_validation_workers = 1;
   int upload_workers = 1;
@@ -91,6 +94,9 @@ bool apply_config_file(const std::string& path, Config& c, const CLI::App& app) 
     if (app.count("--log-calls") == 0) c.log_calls = t["log_calls"].value_or(c.log_calls);
     if (app.count("--metrics-listen") == 0) c.metrics_listen = t["metrics_listen"].value_or(c.metrics_listen);
     if (app.count("--part-memory-gb") == 0) c.part_memory_gb = t["part_memory_gb"].value_or(c.part_memory_gb);
+    if (app.count("--audit-driver") == 0) c.audit_driver = t["audit_driver"].value_or(c.audit_driver);
+    if (app.count("--audit-driver-min-triangles") == 0)
+      c.audit_driver_min_triangles = t["audit_driver_min_triangles"].value_or(c.audit_driver_min_triangles);
     if (app.count("--tls-cert") == 0) c.access.tls_cert_file = t["tls_cert"].value_or(c.access.tls_cert_file);
     if (app.count("--tls-key") == 0) c.access.tls_key_file = t["tls_key"].value_or(c.access.tls_key_file);
     if (app.count("--tls-client-ca") == 0) c.access.tls_client_ca = t["tls_client_ca"].value_or(c.access.tls_client_ca);
@@ -113,7 +119,8 @@ int main(int argc, char** argv) {
   app.add_option("--data-dir", config.data_dir, "where uploaded parts and their records are stored");
   app.add_option("--config", config_file,
                  "a TOML file with listen, data_dir, workers, queue, audit_jobs, log_level, log_format, log_file, "
-                 "log_calls, metrics_listen, part_memory_gb, tls_cert, tls_key, tls_client_ca, token_file");
+                 "log_calls, metrics_listen, part_memory_gb, audit_driver, audit_driver_min_triangles, tls_cert, tls_key, "
+                 "tls_client_ca, token_file");
   app.add_option("--workers", config.workers, "threads for clearance queries")->check(CLI::Range(1, 64));
   app.add_option("--validation-workers", config.validation_workers, "threads validating steps of parametric parts")
       ->check(CLI::Range(1, 64));
@@ -129,6 +136,12 @@ int main(int argc, char** argv) {
   app.add_option("--queue", config.queue, "queued jobs beyond which requests get RESOURCE_EXHAUSTED")->check(CLI::Range(1, 100000));
   app.add_option("--audit-jobs", config.audit_jobs, "audits run at once, on their own threads (a running audit never delays queries)")
       ->check(CLI::Range(1, 16));
+  app.add_option("--audit-driver", config.audit_driver,
+                 "a command that runs an audit over many processes or machines, given --data-dir, --job, --work-dir and --out "
+                 "(e.g. \"mpiexec -n 8 --hostfile hosts gatekeeper-audit\"); audits of large scenes are handed to it");
+  app.add_option("--audit-driver-min-triangles", config.audit_driver_min_triangles,
+                 "scenes with at least this many triangles (counted per object) are audited by --audit-driver")
+      ->check(CLI::Range(0.0, 1e15));
   app.add_option("--max-uploads", config.max_uploads, "upload streams open at once (each holds a file)")->check(CLI::Range(1, 10000));
   app.add_option("--upload-idle-seconds", config.upload_idle_seconds, "an upload stream silent this long is cancelled")
       ->check(CLI::Range(0.1, 86400.0));
@@ -282,6 +295,12 @@ int main(int argc, char** argv) {
   engine_options.audit_threads = config.workers;
   engine_options.audits.concurrent = config.audit_jobs;
   engine_options.audits.ended_in_memory = static_cast<std::size_t>(config.audits_in_memory);
+  if (!config.audit_driver.empty()) {
+    engine_options.audits.large_audits = gk::server::make_audit_handoff({config.audit_driver, config.data_dir});
+    engine_options.audits.large_audit_min_triangles = static_cast<std::size_t>(config.audit_driver_min_triangles);
+    spdlog::info("audits of {} triangles or more are handed to: {}", engine_options.audits.large_audit_min_triangles,
+                 config.audit_driver);
+  }
   gk::engine::Engine engine(*machines.value(), parts, *scenes.value(), archive.value().get(), engine_options,
                             checkpoints.value().get(), clash_statuses.value().get());
   gk::server::GatekeeperService service(engine, options);

@@ -65,7 +65,8 @@ std::vector<AuditedObject> AuditJob::objects() const {
 }
 
 void AuditJob::run(PartRegistry& parts, std::function<void(const AuditSnapshot&)> on_end,
-                   std::function<void(std::size_t, const std::vector<PairClash>&)> on_tile) {
+                   std::function<void(std::size_t, const std::vector<PairClash>&)> on_tile,
+                   const std::function<Result<AuditResult>(const std::vector<AuditObject>&, const AuditOptions&)>& runner) {
   on_end_ = std::move(on_end);
   // The scene's objects in id order; one mesh and BVH per part, shared by every copy.
   auto placed = place_scene(scene_, parts);
@@ -196,7 +197,7 @@ void AuditJob::run(PartRegistry& parts, std::function<void(const AuditSnapshot&)
     update([](AuditSnapshot& s) { s.reaudit = true; });
     result = reaudit_scene(objects, previous, changed, options);
   } else {
-    result = audit_scene(objects, options);
+    result = runner ? runner(objects, options) : audit_scene(objects, options);
   }
   if (!result.ok()) return fail(result.error());
   AuditResult& r = result.value();

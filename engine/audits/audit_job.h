@@ -37,6 +37,12 @@ struct AuditedObject {
 
 enum class AuditStatus { kRunning, kDone, kCancelled, kFailed };
 
+// Runs a job's audit elsewhere (server/audit_handoff: a distributed driver): given the job's id,
+// its scene snapshot, the placed objects and the options (with the job's cancel flag, progress,
+// clash and tile callbacks and the tiles to skip), returns what audit_scene would.
+using AuditRunner = std::function<Result<AuditResult>(const std::string& job_id, const SceneRecord& snapshot,
+                                                      const std::vector<AuditObject>& objects, const AuditOptions& options)>;
+
 struct AuditSnapshot {
   AuditStatus status = AuditStatus::kRunning;
   unsigned long long tiles_total = 0, tiles_done = 0;
@@ -66,8 +72,10 @@ class AuditJob {
   std::vector<std::string> answer_options() const;
   // on_end sees the final state before it is published (the daemon archives it there); on_tile
   // each finished tile (for checkpoints: scene_audit's on_tile_done).
+  // `runner` (when given) audits in its place; a re-audit always runs here.
   void run(PartRegistry& parts, std::function<void(const AuditSnapshot&)> on_end = {},
-           std::function<void(std::size_t, const std::vector<PairClash>&)> on_tile = {});
+           std::function<void(std::size_t, const std::vector<PairClash>&)> on_tile = {},
+           const std::function<Result<AuditResult>(const std::vector<AuditObject>&, const AuditOptions&)>& runner = {});
   // Before run: tiles an earlier run of this job finished (from its checkpoint), not computed again.
   void resume_from(std::map<std::size_t, std::vector<PairClash>> finished_tiles) { finished_tiles_ = std::move(finished_tiles); }
   void cancel() { cancelled_ = true; }

@@ -9,6 +9,7 @@ namespace gk::engine {
 AuditJobs::AuditJobs(PartRegistry& parts, EndedAudits* archive, Options options, AuditCheckpoints* checkpoints,
                      ClashStatuses* statuses)
     : parts_(parts), archive_(archive), ended_in_memory_(std::max<std::size_t>(1, options.ended_in_memory)),
+      large_audits_(std::move(options.large_audits)), large_audit_min_triangles_(options.large_audit_min_triangles),
       checkpoints_(archive ? checkpoints : nullptr), statuses_(statuses), pool_(options.concurrent, options.queued) {}
 
 AuditJobs::~AuditJobs() {
@@ -93,6 +94,13 @@ bool AuditJobs::submit(const std::string& id, std::shared_ptr<AuditJob> job) {
             if (!checkpoints_) return;
             auto kept = checkpoints_->tile_done(id, tile, clashes);
             if (!kept.ok()) spdlog::warn("audit {}: tile {} not checkpointed: {}", id, tile, kept.error().to_string());
+          },
+          [&](const std::vector<AuditObject>& objects, const AuditOptions& options) -> Result<AuditResult> {
+            std::size_t triangles = 0;
+            for (const AuditObject& o : objects) triangles += triangle_count(o);
+            if (!large_audits_ || triangles < large_audit_min_triangles_) return audit_scene(objects, options);
+            spdlog::info("audit {}: {} triangles, handed to the distributed driver", id, triangles);
+            return large_audits_(id, job->scene(), objects, options);
           });
     } catch (const std::exception& e) {
       job->fail_unexpectedly(e.what());

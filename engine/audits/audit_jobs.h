@@ -28,6 +28,10 @@ class AuditJobs {
     std::size_t ended_in_memory = 16;  // ended jobs kept in memory (the rest are read back when asked for)
     int concurrent = 1;                // audits run at once, on their own threads
     std::size_t queued = 16;           // audits waiting; beyond, start() is refused (kResourceExhausted)
+    // Audits of scenes with at least this many triangles (counted per object) are run by
+    // large_audits (a distributed driver), when one is given; re-audits always run here.
+    AuditRunner large_audits;
+    std::size_t large_audit_min_triangles = 0;
   };
   // archive may be null (nothing is then dropped: an ended job lives only in memory); checkpoints
   // may be null (a running job is then lost when the daemon stops).
@@ -68,6 +72,8 @@ class AuditJobs {
   PartRegistry& parts_;
   EndedAudits* archive_;
   const std::size_t ended_in_memory_;
+  AuditRunner large_audits_;
+  std::size_t large_audit_min_triangles_ = 0;
   AuditCheckpoints* checkpoints_;
   ClashStatuses* statuses_;
   mutable std::mutex mutex_;

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <tuple>
@@ -269,6 +270,7 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
   };
   std::vector<double>& tile_cost = result.tile_costs;
   tile_cost.assign(result.tiles, 0.0);
+  result.tile_pairs.assign(result.tiles, 0);
   std::vector<IndexPair> work;
   std::vector<std::size_t> work_tile;
   std::size_t done_before = 0;
@@ -279,6 +281,7 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
       continue;
     }
     tile_cost[owner[i]] += pair_cost(p);
+    ++result.tile_pairs[owner[i]];
     if (skipped[owner[i]]) {
       ++done_before;
     } else {
@@ -317,14 +320,25 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
   setup.tiles = std::move(tiles);
   setup.work = &work;
   setup.budget_bytes = options.memory_budget_bytes;
-  for (const AuditObject& o : objects) {
+  // One mesh per distinct MeshBvh in memory or pack file on disk: objects sharing one share its reading.
+  std::map<const MeshBvh*, std::uint32_t> mesh_in_memory;
+  std::map<std::string, std::uint32_t> mesh_on_disk;
+  std::vector<std::uint32_t> first_object;  // per mesh, an object holding it
+  for (std::uint32_t i = 0; i < objects.size(); ++i) {
+    const AuditObject& o = objects[i];
+    const auto next = static_cast<std::uint32_t>(first_object.size());
+    const std::uint32_t m = o.mesh ? mesh_in_memory.emplace(o.mesh.get(), next).first->second
+                                   : mesh_on_disk.emplace(o.packed->path, next).first->second;
+    setup.mesh_of.push_back(m);
+    if (m != next) continue;
+    first_object.push_back(i);
     setup.in_memory.push_back(o.mesh);
-    // Held in memory: the pack's arrays plus the tree-ordered copy of the corners (about 24
-    // bytes per triangle); the file's bytes are read through a buffer of their size.
-    setup.bytes.push_back(o.packed ? o.packed->bytes + 24 * static_cast<std::uint64_t>(o.packed->triangles) : 0);
+    // Held in memory: the pack's arrays (the tree reads the mesh's own corners); read through a
+    // mapping of the file. Counted with a margin for the allocations' rounding.
+    setup.bytes.push_back(o.packed ? o.packed->bytes + o.packed->bytes / 8 : 0);
     setup.file_bytes.push_back(o.packed ? o.packed->bytes : 0);
   }
-  setup.loader = [&objects](std::uint32_t i) { return read_packed_mesh(*objects[i].packed); };
+  setup.loader = [&objects, &first_object](std::uint32_t m) { return read_packed_mesh(*objects[first_object[m]].packed); };
   TileScheduler scheduler(std::move(setup));
   std::vector<PairClash> slots(work.size());
   std::vector<char> state(work.size(), 0);  // 0 not done, 1 done no clash, 2 clash
@@ -346,6 +360,10 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
       } else {
         clash = audit_pair(objects[c.a], *assigned->a, objects[c.b], *assigned->b, options, c);
       }
+      // The pair's hold on its meshes ends before the tile may be finished, so that what the
+      // scheduler lets go is freed at once (its budget counts what it holds).
+      assigned->a.reset();
+      assigned->b.reset();
       state[i] = clash ? 2 : 1;
       ++done;
       if (clash) ++clashes;
@@ -381,6 +399,7 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
   result.meshes_read = io.meshes_read;
   result.peak_held_bytes = io.peak_held_bytes;
   result.tiles_over_budget = io.tiles_over_budget;
+  result.meshes_let_go = io.meshes_let_go;
   for (std::size_t i = 0; i < work.size(); ++i)
     if (state[i] == 2) result.clashes.push_back(std::move(slots[i]));
   sort_in_pair_order(result.clashes);  // tile order is not (a, b) order when the tiles are several

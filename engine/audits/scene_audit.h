@@ -129,11 +129,14 @@ struct AuditResult {
   // Per tile, the estimated cost of its pairs (the sum over its pairs of both meshes' triangle
   // counts; 0: no pair to audit), skipped tiles included.
   std::vector<double> tile_costs;
+  std::vector<std::size_t> tile_pairs;   // per tile, its pairs for the narrow phase (skipped tiles included)
   bool cancelled = false;                // then clashes cover the pairs_done pairs finished
   AuditTimes times;
-  // Out of core: the bytes of packs read and how many, the most held at once (estimated in-memory
-  // bytes), and the tiles admitted beyond the budget because nothing else was running.
+  // Out of core: the bytes of packs read and how many (objects sharing a pack share its reading),
+  // the most held at once (estimated in-memory bytes), meshes let go to fit the budget, and the
+  // tiles admitted beyond the budget because alone they do not fit it.
   std::uint64_t bytes_read = 0, meshes_read = 0, peak_held_bytes = 0;
+  std::uint64_t meshes_let_go = 0;       // let go to fit the budget, then read again
   std::size_t tiles_over_budget = 0;
 };
 

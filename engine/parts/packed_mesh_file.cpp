@@ -21,6 +21,31 @@ Error file_error(const std::string& path, const std::string& why) { return inval
 
 bool same_box(const Aabb& a, const Aabb& b) { return a.min == b.min && a.max == b.max; }
 
+// Opens a regular file for reading without blocking on anything else (a FIFO put there).
+int open_regular(const std::string& path, struct stat& st) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+  if (fd < 0) return -1;
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(fd);
+    errno = EINVAL;
+    return -1;
+  }
+  return fd;
+}
+
+// The file there is this pack: the same size and the same closing checksum.
+bool same_pack_there(const PackedMeshFile& file) {
+  struct stat st {};
+  const int fd = open_regular(file.path, st);
+  if (fd < 0) return false;
+  char tail[16];
+  const bool same = static_cast<std::uint64_t>(st.st_size) == file.bytes && file.bytes >= sizeof tail &&
+                    ::pread(fd, tail, sizeof tail, static_cast<off_t>(file.bytes - sizeof tail)) == static_cast<ssize_t>(sizeof tail) &&
+                    std::memcmp(tail, &file.checksum.low, 8) == 0 && std::memcmp(tail + 8, &file.checksum.high, 8) == 0;
+  ::close(fd);
+  return same;
+}
+
 }  // namespace
 
 Result<PackedMeshFile> write_packed_mesh(const MeshBvh& bvh, const std::string& directory) {
@@ -32,8 +57,8 @@ Result<PackedMeshFile> write_packed_mesh(const MeshBvh& bvh, const std::string& 
   file.triangles = bvh.mesh().triangle_count();
   const std::string bytes = pack_mesh_bvh(bvh);
   file.bytes = bytes.size();
-  struct stat existing {};
-  if (::stat(file.path.c_str(), &existing) == 0 && static_cast<std::uint64_t>(existing.st_size) == file.bytes) return file;
+  file.checksum = pack_checksum(bytes);
+  if (same_pack_there(file)) return file;
   std::ostringstream tmp;
   tmp << file.path << ".tmp." << ::getpid() << "." << std::this_thread::get_id();
   const int fd = ::open(tmp.str().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
@@ -59,10 +84,10 @@ Result<PackedMeshFile> write_packed_mesh(const MeshBvh& bvh, const std::string& 
 }
 
 Result<std::shared_ptr<const MeshBvh>> read_packed_mesh(const PackedMeshFile& file) {
-  const int fd = ::open(file.path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return file_error(file.path, std::string("cannot be opened: ") + std::strerror(errno));
   struct stat st {};
-  if (::fstat(fd, &st) != 0 || static_cast<std::uint64_t>(st.st_size) != file.bytes) {
+  const int fd = open_regular(file.path, st);
+  if (fd < 0) return file_error(file.path, std::string("cannot be opened as a regular file: ") + std::strerror(errno));
+  if (static_cast<std::uint64_t>(st.st_size) != file.bytes) {
     ::close(fd);
     return file_error(file.path, "is not the size it was written with (" + std::to_string(file.bytes) + " bytes)");
   }
@@ -73,6 +98,10 @@ Result<std::shared_ptr<const MeshBvh>> read_packed_mesh(const PackedMeshFile& fi
   ::close(fd);
   if (mapped == MAP_FAILED) return file_error(file.path, std::string("cannot be mapped: ") + std::strerror(errno));
   const std::string_view bytes(static_cast<const char*>(mapped), static_cast<std::size_t>(file.bytes));
+  if (pack_checksum(bytes) != file.checksum) {
+    ::munmap(mapped, static_cast<std::size_t>(file.bytes));
+    return file_error(file.path, "is not the pack written for this object (another mesh's, or written again since)");
+  }
   auto bvh = unpack_mesh_bvh(bytes);
   ::munmap(mapped, static_cast<std::size_t>(file.bytes));
   if (!bvh.ok()) return file_error(file.path, bvh.error().to_string());

@@ -40,15 +40,20 @@ std::string pack_mesh_bvh(const MeshBvh& bvh) {
   return out;
 }
 
+Hash128 pack_checksum(std::string_view bytes) {
+  Hash128 stored;
+  if (bytes.size() < sizeof kPackMagic + 8 + kChecksumBytes) return stored;
+  std::memcpy(&stored.low, bytes.data() + bytes.size() - kChecksumBytes, 8);
+  std::memcpy(&stored.high, bytes.data() + bytes.size() - 8, 8);
+  return stored;
+}
+
 Result<std::shared_ptr<MeshBvh>> unpack_mesh_bvh(std::string_view bytes) {
   auto bad = [](const std::string& why) { return invalid_argument("packed mesh", why); };
   if (bytes.size() < sizeof kPackMagic + 8 + kChecksumBytes || std::memcmp(bytes.data(), kPackMagic, sizeof kPackMagic) != 0)
     return bad("not a packed mesh of this version");
   const std::string_view body = bytes.substr(0, bytes.size() - kChecksumBytes);
-  Hash128 stored;
-  std::memcpy(&stored.low, bytes.data() + body.size(), 8);
-  std::memcpy(&stored.high, bytes.data() + body.size() + 8, 8);
-  if (checksum(body) != stored) return bad("the checksum does not match: the bytes are damaged");
+  if (checksum(body) != pack_checksum(bytes)) return bad("the checksum does not match: the bytes are damaged");
   std::uint64_t mesh_size = 0;
   std::memcpy(&mesh_size, body.data() + sizeof kPackMagic, sizeof mesh_size);
   std::string_view rest = body.substr(sizeof kPackMagic + sizeof mesh_size);

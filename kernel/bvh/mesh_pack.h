@@ -5,12 +5,15 @@
 // Layout: "GKPACK01", the mesh's byte count, the mesh renumbered in tree order
 // (MeshBvh::in_tree_order, TriangleMesh::append_bytes), the tree (MeshBvh::serialize), then the
 // XXH3-128 of everything before it. The unpacked mesh is that renumbered copy: the same triangles
-// and coordinates, other indices. Reading checks the checksum
+// and coordinates, other indices. The checksum tells damage, not intent: a pack is trusted as
+// written once it matches, so the mesh's analysis (closed, oriented, degenerate triangles) is not
+// redone; whoever records where a pack is should record its checksum too (pack_checksum). Reading checks the checksum
 // first, then every count and index, and the tree as MeshBvh::deserialize does (each box holds
 // what it claims, compared in double): a damaged or foreign block is an error, never a mesh.
 #pragma once
 
 #include "kernel/bvh/mesh_bvh.h"
+#include "kernel/core/content_hash.h"
 
 #include <memory>
 #include <string>
@@ -20,5 +23,9 @@ namespace gk {
 
 std::string pack_mesh_bvh(const MeshBvh& bvh);
 Result<std::shared_ptr<MeshBvh>> unpack_mesh_bvh(std::string_view bytes);
+// The checksum a pack ends with (what names this pack among all others: a caller that recorded it
+// when writing can tell its pack from another valid one put in its place). Zero for bytes too
+// short to be a pack.
+Hash128 pack_checksum(std::string_view bytes);
 
 }  // namespace gk

@@ -21,7 +21,7 @@
 #include "engine/scenes/placed_scene.h"
 #include "engine/scenes/scene_store.h"
 #include "kernel/core/content_hash.h"
-#include "server/audit_checkpoint_store.h"
+#include "server/distributed_audit/audit_work_dir.h"
 
 #include <CLI/CLI.hpp>
 #include <mpi.h>
@@ -42,40 +42,9 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace gk;
-
-std::string tile_path(const std::string& work_dir, std::size_t tile) { return work_dir + "/tile-" + std::to_string(tile) + ".bin"; }
-
-// A tile file: a header naming the audit (its fingerprint), the tile and the length of the
-// clashes' bytes that follow, so a file of another audit, tile or a cut one is never read as this.
-std::string tile_header(const std::string& print, std::size_t tile, std::size_t bytes) {
-  return "GKTILE1 " + print + " " + std::to_string(tile) + " " + std::to_string(bytes) + "\n";
-}
-
-// Whole, synced, then renamed: a reader never sees half a tile.
-bool write_whole(const std::string& path, const std::string& bytes) {
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  if (fd < 0) return false;
-  std::size_t done = 0;
-  while (done < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-    if (n <= 0) {
-      ::close(fd);
-      return false;
-    }
-    done += static_cast<std::size_t>(n);
-  }
-  const bool synced = ::fsync(fd) == 0;
-  ::close(fd);
-  return synced && std::rename(tmp.c_str(), path.c_str()) == 0;
-}
-
-std::string read_whole(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using server::read_whole;
+using server::tile_path;
+using server::write_whole;
 
 const char* verdict_name(Verdict v) {
   switch (v) {
@@ -88,38 +57,6 @@ const char* verdict_name(Verdict v) {
 }
 
 nlohmann::json vec(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
-
-// What the tiles in a work directory were computed from: the scene's snapshot (every object's id,
-// part, pose, category and group) and the options that shape answers or tiles. A work directory
-// holding another audit's tiles is refused, never merged.
-std::string fingerprint(const engine::SceneRecord& scene, const engine::AuditOptions& o) {
-  ContentHash h;
-  auto text = [&](const std::string& t) {
-    h.add(static_cast<std::uint64_t>(t.size()));
-    h.add_bytes(t.data(), t.size());
-  };
-  text(scene.id);
-  for (const auto& [id, object] : scene.objects) {
-    text(id);
-    text(object.part_id);
-    text(object.category);
-    text(object.group);
-    const engine::StoredPose& p = object.pose;
-    h.add({p.translation.x(), p.translation.y(), p.translation.z(), p.axis.x(), p.axis.y(), p.axis.z(), p.angle_deg});
-  }
-  h.add({o.clearance_mm, o.tile_mm, o.region_merge_mm, o.compute_depth ? 1.0 : 0.0, o.compute_volume ? 1.0 : 0.0});
-  h.add(static_cast<std::uint64_t>(o.max_contacts_per_pair));
-  for (const engine::ContactRule& r : o.rules) {
-    text(r.name);
-    text(r.category_a);
-    text(r.category_b);
-    h.add(static_cast<std::uint64_t>(r.same_group_only));
-  }
-  const Hash128 v = h.value();
-  char hex[33];
-  std::snprintf(hex, sizeof hex, "%016llx%016llx", static_cast<unsigned long long>(v.high), static_cast<unsigned long long>(v.low));
-  return hex;
-}
 
 int fail(int rank, const std::string& message) {
   std::fprintf(stderr, "gatekeeper-audit (process %d): %s\n", rank, message.c_str());
@@ -141,7 +78,12 @@ int main(int argc, char** argv) {
   int threads = 1;
   double memory_budget_gb = 0.0;
   app.add_option("--data-dir", data_dir, "the daemon's data directory (read only)")->required();
-  app.add_option("--scene", scene_id, "the scene to audit")->required();
+  std::string job_path;
+  auto* scene_option = app.add_option("--scene", scene_id, "the scene to audit (as it is in the data directory now)");
+  auto* job_option = app.add_option("--job", job_path,
+                                    "instead of --scene: a job file (a scene snapshot and all options) written by the daemon "
+                                    "handing this audit over; its options replace the ones given here");
+  scene_option->excludes(job_option);
   app.add_option("--work-dir", work_dir, "a directory every process can write: finished tiles (the checkpoint)")->required();
   app.add_option("--out", out_path, "the report (JSON), written by process 0")->required();
   app.add_option("--clearance-mm", asked.clearance_mm, "pairs closer than this are clearance violations");
@@ -161,20 +103,31 @@ int main(int argc, char** argv) {
     return e.get_exit_code() == 0 ? 0 : 2;
   }
   asked.threads = threads;
+  if (scene_id.empty() && job_path.empty()) return fail(rank, "--scene or --job is required");
+  Result<engine::SceneRecord> scene = Error{};
+  if (!job_path.empty()) {
+    auto job = server::read_job_file(job_path);
+    if (!job.ok()) return fail(rank, job.error().to_string());
+    scene = job.value().scene;
+    asked = job.value().options;
+    scene_id = job.value().scene.id;
+  }
   auto options = engine::checked_audit_options(asked, 1);
   if (!options.ok()) return fail(rank, options.error().to_string());
   if (!fs::is_regular_file(data_dir + "/gatekeeper.sqlite")) return fail(rank, "--data-dir: no daemon data directory at " + data_dir);
-  auto scenes = engine::SceneStore::open_read_only(data_dir);
-  if (!scenes.ok()) return fail(rank, scenes.error().to_string());
-  auto scene = scenes.value()->get(scene_id);
-  if (!scene.ok()) return fail(rank, scene.error().to_string());
+  if (job_path.empty()) {
+    auto scenes = engine::SceneStore::open_read_only(data_dir);
+    if (!scenes.ok()) return fail(rank, scenes.error().to_string());
+    scene = scenes.value()->get(scene_id);
+    if (!scene.ok()) return fail(rank, scene.error().to_string());
+  }
 
   // The work directory belongs to this audit: its fingerprint is written by the first run (each
   // process writes the same bytes, renamed into place) and must match on every later one.
   std::error_code ec;
   fs::create_directories(work_dir, ec);
   if (ec) return fail(rank, "--work-dir: cannot create " + work_dir + ": " + ec.message());
-  const std::string print = fingerprint(scene.value(), options.value());
+  const std::string print = server::audit_fingerprint(scene.value(), options.value());
   const std::string print_path = work_dir + "/audit.fingerprint";
   if (!fs::exists(print_path) && !write_whole(print_path, print + "\n")) return fail(rank, "--work-dir: cannot write " + print_path);
   if (read_whole(print_path) != print + "\n")
@@ -219,8 +172,7 @@ int main(int argc, char** argv) {
   std::string write_error;
   std::size_t written = 0;
   run.on_tile_done = [&](std::size_t tile, const std::vector<engine::PairClash>& clashes) {
-    const std::string bytes = server::encode_tile(clashes);
-    if (!write_whole(tile_path(work_dir, tile), tile_header(print, tile, bytes.size()) + bytes))
+    if (!write_whole(tile_path(work_dir, tile), server::tile_file_bytes(print, tile, clashes)))
       write_error = "cannot write " + tile_path(work_dir, tile);
     else ++written;
   };
@@ -249,11 +201,7 @@ int main(int argc, char** argv) {
         missing.push_back(t);
         continue;
       }
-      const std::string text = read_whole(tile_path(work_dir, t));
-      const std::size_t eol = text.find('\n');
-      const std::string bytes = eol == std::string::npos ? "" : text.substr(eol + 1);
-      const bool headed = eol != std::string::npos && text.substr(0, eol + 1) == tile_header(print, t, bytes.size());
-      auto tile = headed ? server::decode_tile(bytes) : Result<std::vector<engine::PairClash>>(Error{ErrorCode::kInternal, "tile", "not this audit's tile, or cut short"});
+      auto tile = server::read_tile_file(tile_path(work_dir, t), print, t);
       if (!tile.ok()) return fail(rank, tile_path(work_dir, t) + ": " + tile.error().message + " (delete the file and run again)");
       for (const engine::PairClash& c : tile.value())
         if (c.b >= objects.size()) return fail(rank, tile_path(work_dir, t) + ": names an object this scene does not have (delete the file and run again)");

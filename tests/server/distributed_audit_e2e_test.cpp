@@ -229,5 +229,92 @@ TEST(DistributedAuditE2E, AKilledProcessEndsTheJobAndTheSameCommandRedoesOnlyIts
   EXPECT_EQ(resumed + computed, all);
 }
 
+
+// The daemon configured with a driver hands a large audit to it (gatekeeper-audit under mpiexec,
+// two processes) and reports the same audit as when it runs it itself, clash for clash, with
+// progress; a driver that fails makes the job FAILED naming it, and a cancel ends the driver.
+TEST(DistributedAuditE2E, TheDaemonHandsALargeAuditToItsDriverAndReportsTheSame) {
+  const std::string dir = testing::temp_dir("mpi-handoff");
+  std::string scene;
+  pb::StartAuditRequest start;
+  start.set_clearance_mm(20.0);
+  start.set_tile_mm(2500.0);
+  pb::AuditReport local;
+  {
+    Daemon daemon(dir);
+    auto stub = daemon.stub();
+    scene = crate_yard(*stub, 150, 7);
+    start.set_scene_id(scene);
+    local = testing::run_audit(*stub, start);
+    ASSERT_EQ(local.progress().state(), pb::DONE);
+    ASSERT_GT(local.clashes_size(), 20);
+  }
+  const std::string driver = std::string("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
+                                         "ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 mpiexec --oversubscribe -n 2 ") +
+                             GATEKEEPER_AUDIT_PATH;
+  {
+    Daemon daemon(dir, {"--audit-driver", driver, "--audit-driver-min-triangles", "1"});
+    auto stub = daemon.stub();
+    const pb::AuditReport handed = testing::run_audit(*stub, start);
+    ASSERT_EQ(handed.progress().state(), pb::DONE) << handed.progress().message();
+    EXPECT_EQ(handed.progress().tiles_done(), handed.progress().tiles_total());
+    EXPECT_GT(handed.progress().tiles_total(), 4u);
+    EXPECT_EQ(handed.progress().pairs_done(), handed.progress().pairs_total());
+    ASSERT_EQ(handed.clashes_size(), local.clashes_size());
+    for (int i = 0; i < local.clashes_size(); ++i) {
+      const pb::Clash& a = local.clashes(i);
+      const pb::Clash& b = handed.clashes(i);
+      EXPECT_EQ(a.object_a(), b.object_a());
+      EXPECT_EQ(a.object_b(), b.object_b());
+      EXPECT_EQ(a.verdict(), b.verdict());
+      EXPECT_EQ(a.distance_mm(), b.distance_mm());  // to the bit
+      EXPECT_EQ(a.contact_pairs(), b.contact_pairs());
+      EXPECT_EQ(a.point().x_mm(), b.point().x_mm());
+      EXPECT_EQ(a.point_b().y_mm(), b.point_b().y_mm());
+      EXPECT_EQ(a.clash_id(), b.clash_id());
+    }
+    EXPECT_EQ(handed.candidate_pairs(), local.candidate_pairs());
+    EXPECT_FALSE(fs::exists(dir + "/audit-work") && !fs::is_empty(dir + "/audit-work"));  // a finished job's work is removed
+  }
+  {  // A driver that fails: the job fails, naming it and its log.
+    Daemon daemon(dir, {"--audit-driver", "false", "--audit-driver-min-triangles", "1"});
+    auto stub = daemon.stub();
+    const pb::AuditReport failed = testing::run_audit(*stub, start);
+    EXPECT_EQ(failed.progress().state(), pb::FAILED);
+    EXPECT_NE(failed.progress().message().find("'false' ended with status"), std::string::npos) << failed.progress().message();
+  }
+  {  // A driver that would run long: a cancel ends it at once.
+    const std::string pid_file = dir + "/driver.pid";
+    Daemon daemon(dir, {"--audit-driver", "echo $$ > " + pid_file + "; sleep 60; true", "--audit-driver-min-triangles", "1"});
+    auto stub = daemon.stub();
+    pb::AuditJob job;
+    grpc::ClientContext sctx;
+    ASSERT_TRUE(stub->StartAudit(&sctx, start, &job).ok());
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    const auto t0 = std::chrono::steady_clock::now();
+    grpc::ClientContext cctx;
+    pb::CancelAuditRequest cancel;
+    cancel.set_job_id(job.job_id());
+    pb::AuditProgress after;
+    ASSERT_TRUE(stub->CancelAudit(&cctx, cancel, &after).ok());
+    pb::AuditProgress progress;
+    for (int i = 0; i < 100; ++i) {
+      grpc::ClientContext gctx;
+      pb::GetAuditReportRequest get;
+      get.set_job_id(job.job_id());
+      pb::AuditReport report;
+      ASSERT_TRUE(stub->GetAuditReport(&gctx, get, &report).ok());
+      progress = report.progress();
+      if (progress.state() != pb::RUNNING) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    EXPECT_EQ(progress.state(), pb::CANCELLED);
+    EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(8));
+    // The driver's shell leads its process group: nothing of the group is left.
+    ASSERT_TRUE(fs::exists(pid_file));
+    EXPECT_NE(shell("kill -0 -- -$(cat " + pid_file + ") 2>/dev/null"), 0) << "the driver's process group outlived the cancel";
+  }
+}
+
 }  // namespace
 }  // namespace gk

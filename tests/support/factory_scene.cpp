@@ -75,7 +75,7 @@ engine::PackedMeshFile pack(const MeshBvh& bvh, const std::string& dir) {
 }
 
 constexpr const char* kIndexName = "scene.index";
-constexpr const char* kIndexHeader = "gatekeeper-factory-index 1";
+constexpr const char* kIndexHeader = "gatekeeper-factory-index 2";
 
 // The scene's objects (every one packed) and rules, as text with round-trip doubles.
 void write_index(const FactoryScene& scene, const std::string& dir) {
@@ -100,7 +100,10 @@ void write_index(const FactoryScene& scene, const std::string& dir) {
       out << '\t' << std::filesystem::path(o.packed->path).filename().string();
       for (int i = 0; i < 3; ++i) put(o.packed->bounds.min[i]);
       for (int i = 0; i < 3; ++i) put(o.packed->bounds.max[i]);
-      out << '\t' << o.packed->triangles << '\t' << o.packed->bytes << "\n";
+      char sum[40];
+      std::snprintf(sum, sizeof sum, "%016llx:%016llx", static_cast<unsigned long long>(o.packed->checksum.low),
+                    static_cast<unsigned long long>(o.packed->checksum.high));
+      out << '\t' << o.packed->triangles << '\t' << o.packed->bytes << '\t' << sum << "\n";
     }
     out << "end\n";
     if (!out) throw std::runtime_error("cannot write " + tmp);
@@ -292,7 +295,7 @@ Result<FactoryScene> read_factory_scene_index(const std::string& pack_dir) {
   for (std::size_t k = 0; k < count; ++k) {
     if (!std::getline(in, line)) return bad("ends inside the objects");
     const auto f = fields(line);
-    if (f.size() != 3 + 12 + 1 + 1 + 6 + 2) return bad("has a malformed object line " + std::to_string(k));
+    if (f.size() != 3 + 12 + 1 + 1 + 6 + 3) return bad("has a malformed object line " + std::to_string(k));
     AuditObject o;
     o.name = f[0];
     o.category = f[1];
@@ -311,6 +314,10 @@ Result<FactoryScene> read_factory_scene_index(const std::string& pack_dir) {
     file.bounds.extend(hi);
     file.triangles = std::stoull(f[at++]);
     file.bytes = std::stoull(f[at++]);
+    unsigned long long low = 0, high = 0;
+    if (std::sscanf(f[at++].c_str(), "%llx:%llx", &low, &high) != 2) return bad("has a malformed checksum on object line " + std::to_string(k));
+    file.checksum.low = low;
+    file.checksum.high = high;
     scene.triangles += file.triangles;
     o.packed = std::move(file);
     scene.objects.push_back(std::move(o));
