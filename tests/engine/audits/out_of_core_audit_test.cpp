@@ -28,6 +28,37 @@ std::string fresh_dir(const std::string& name) {
   return dir;
 }
 
+// A loader handing out one shared mesh as every object's, counting the readings and the bytes
+// alive (a reading's bytes end when the scheduler drops its last reference to it).
+struct CountingLoader {
+  std::shared_ptr<const MeshBvh> mesh;
+  std::vector<std::uint64_t> sizes;
+  std::uint32_t unreadable = 0xffffffffu;  // this object's reading fails
+  std::mutex m;
+  std::map<std::uint32_t, int> reads;
+  std::uint64_t live = 0, most_live = 0;
+
+  TileScheduler::Loader loader() {
+    return [this](std::uint32_t o) -> Result<std::shared_ptr<const MeshBvh>> {
+      if (o == unreadable) return invalid_argument("objects[" + std::to_string(o) + "]", "unreadable");
+      std::lock_guard<std::mutex> lock(m);
+      ++reads[o];
+      live += sizes[o];
+      most_live = std::max(most_live, live);
+      const std::uint64_t bytes = sizes[o];
+      return std::shared_ptr<const MeshBvh>(mesh.get(), [this, bytes, keep = mesh](const MeshBvh*) {
+        std::lock_guard<std::mutex> release(m);
+        live -= bytes;
+      });
+    };
+  }
+  std::size_t total_reads() const {
+    std::size_t total = 0;
+    for (const auto& [o, n] : reads) total += static_cast<std::size_t>(n);
+    return total;
+  }
+};
+
 TEST(TileScheduler, EveryMeshIsHeldOnlyWhileNeededWithinTheBudgetAndReadAgainOnlyWhenLetGo) {
   const auto mesh = MeshBvh::build(testing::share(testing::box_mesh(Vec3::Zero(), Vec3::Ones()))).value();
   std::mt19937_64 rng(5);
@@ -63,23 +94,11 @@ TEST(TileScheduler, EveryMeshIsHeldOnlyWhileNeededWithinTheBudgetAndReadAgainOnl
       largest_tile = std::max(largest_tile, bytes);
     }
     setup.budget_bytes = trial % 4 == 0 ? 0 : 1 + rng() % 600;
-    const std::vector<std::uint64_t> sizes = setup.bytes;  // setup is moved into the scheduler
-    std::mutex m;
-    std::map<std::uint32_t, int> reads;
-    std::uint64_t live = 0, most_live = 0;
-    setup.loader = [&](std::uint32_t o) -> Result<std::shared_ptr<const MeshBvh>> {
-      if (o == 13) return invalid_argument("objects[13]", "unreadable");
-      std::lock_guard<std::mutex> lock(m);
-      ++reads[o];
-      live += sizes[o];
-      most_live = std::max(most_live, live);
-      const std::uint64_t bytes = sizes[o];
-      // Counts the release: the scheduler drops its last reference when no later tile needs it.
-      return std::shared_ptr<const MeshBvh>(mesh.get(), [&, bytes, keep = mesh](const MeshBvh*) {
-        std::lock_guard<std::mutex> release(m);
-        live -= bytes;
-      });
-    };
+    CountingLoader counting;
+    counting.mesh = mesh;
+    counting.sizes = setup.bytes;  // setup is moved into the scheduler
+    counting.unreadable = 13;
+    setup.loader = counting.loader();
     const std::uint64_t budget = setup.budget_bytes;
     TileScheduler scheduler(std::move(setup));
     std::vector<int> done(work.size(), 0);
@@ -107,17 +126,15 @@ TEST(TileScheduler, EveryMeshIsHeldOnlyWhileNeededWithinTheBudgetAndReadAgainOnl
     for (int t = 0; t < 4; ++t) threads.emplace_back(worker);
     for (auto& t : threads) t.join();
     for (int d : done) EXPECT_EQ(d, 1);  // every pair handed out once
-    EXPECT_EQ(live, 0u);  // everything read was released
+    EXPECT_EQ(counting.live, 0u);  // everything read was released
     const auto stats = scheduler.stats();
     // Read once, unless let go to fit the budget (then once more for each letting go).
-    std::size_t total_reads = 0;
-    for (const auto& [o, n] : reads) total_reads += static_cast<std::size_t>(n);
-    EXPECT_EQ(total_reads, reads.size() + stats.meshes_let_go) << "trial " << trial;
+    EXPECT_EQ(counting.total_reads(), counting.reads.size() + stats.meshes_let_go) << "trial " << trial;
     if (budget == 0) {
       EXPECT_EQ(stats.meshes_let_go, 0u);
     }
     if (budget != 0 && stats.tiles_over_budget == 0) {
-      EXPECT_LE(most_live, budget) << "trial " << trial;
+      EXPECT_LE(counting.most_live, budget) << "trial " << trial;
     }
     if (budget != 0 && largest_tile <= budget) {
       EXPECT_EQ(stats.tiles_over_budget, 0u);
@@ -285,21 +302,10 @@ TEST(TileScheduler, SharedMeshesAreReadOnceAndLongObjectsAreLetGoToKeepTheBudget
       setup.bytes.push_back(o % 3 == 0 ? 100 : 10);  // a long object is large
     }
     setup.budget_bytes = 250;  // two rows' long objects fit, not eight
-    std::mutex m;
-    std::map<std::uint32_t, int> reads;
-    std::uint64_t live = 0, most_live = 0;
-    const std::vector<std::uint64_t> sizes = setup.bytes;
-    setup.loader = [&](std::uint32_t o) -> Result<std::shared_ptr<const MeshBvh>> {
-      std::lock_guard<std::mutex> lock(m);
-      ++reads[o];
-      live += sizes[o];
-      most_live = std::max(most_live, live);
-      const std::uint64_t bytes = sizes[o];
-      return std::shared_ptr<const MeshBvh>(mesh.get(), [&, bytes, keep = mesh](const MeshBvh*) {
-        std::lock_guard<std::mutex> release(m);
-        live -= bytes;
-      });
-    };
+    CountingLoader counting;
+    counting.mesh = mesh;
+    counting.sizes = setup.bytes;
+    setup.loader = counting.loader();
     TileScheduler scheduler(std::move(setup));
     std::mutex done_mutex;
     std::vector<std::thread> pool;
@@ -317,12 +323,10 @@ TEST(TileScheduler, SharedMeshesAreReadOnceAndLongObjectsAreLetGoToKeepTheBudget
     const auto stats = scheduler.stats();
     EXPECT_EQ(stats.tiles_over_budget, 0u);
     EXPECT_LE(stats.peak_held_bytes, 250u);
-    EXPECT_LE(most_live, 250u) << threads << " threads";
+    EXPECT_LE(counting.most_live, 250u) << threads << " threads";
     EXPECT_GT(stats.meshes_let_go, 0u);  // some long objects were read twice ...
-    std::size_t total = 0;
-    for (const auto& [o, n] : reads) total += static_cast<std::size_t>(n);
-    EXPECT_EQ(total, reads.size() + stats.meshes_let_go);  // ... exactly those let go
-    EXPECT_EQ(live, 0u);
+    EXPECT_EQ(counting.total_reads(), counting.reads.size() + stats.meshes_let_go);  // ... exactly those let go
+    EXPECT_EQ(counting.live, 0u);
   }
   // Ten objects on one mesh: one reading.
   std::vector<std::pair<std::uint32_t, std::uint32_t>> work;
