@@ -12,7 +12,13 @@
 #include <spdlog/spdlog.h>
 
 #include <cctype>
+#include <cerrno>
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <fstream>
+#include <optional>
+#include <sstream>
 #include <cstring>
 #include <filesystem>
 #include <set>
@@ -44,18 +50,59 @@ std::string log_tail(const std::string& path) {
   return text.size() > 2000 ? "..." + text.substr(text.size() - 2000) : text;
 }
 
-// Ends the driver's process group: TERM, then KILL if it is still there after a grace period.
-int stop_group(pid_t pid) {
+bool group_alive(pid_t group) { return ::kill(-group, 0) == 0 || errno == EPERM; }
+
+// Ends the driver's process group: TERM (mpiexec passes it on to its ranks), then KILL to whatever
+// of the group is left after a grace period; reaps the leader. Returns its wait status.
+int stop_group(pid_t pid, bool reaped, int status) {
   ::kill(-pid, SIGTERM);
-  int status = 0;
   const auto give_up = Clock::now() + std::chrono::seconds(5);
   while (Clock::now() < give_up) {
-    if (::waitpid(pid, &status, WNOHANG) == pid) return status;
+    if (!reaped && ::waitpid(pid, &status, WNOHANG) == pid) reaped = true;
+    if (reaped && !group_alive(pid)) return status;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   ::kill(-pid, SIGKILL);
-  ::waitpid(pid, &status, 0);
+  if (!reaped) ::waitpid(pid, &status, 0);
   return status;
+}
+
+// Every process whose command line names this work directory (a driver, mpiexec and its ranks,
+// which Open MPI puts in process groups of their own), but this one.
+std::vector<pid_t> processes_naming(const std::string& work) {
+  std::vector<pid_t> out;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator("/proc", fs::directory_options::skip_permission_denied, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.empty() || !std::all_of(name.begin(), name.end(), [](char c) { return c >= '0' && c <= '9'; })) continue;
+    const pid_t pid = static_cast<pid_t>(std::stol(name));
+    if (pid == ::getpid()) continue;
+    std::ifstream cmd_file(entry.path() / "cmdline");
+    const std::string cmdline((std::istreambuf_iterator<char>(cmd_file)), std::istreambuf_iterator<char>());
+    if (cmdline.find(work) != std::string::npos) out.push_back(pid);
+  }
+  return out;
+}
+
+// A driver of this work directory left running by a daemon that was killed: TERM to each of its
+// processes, KILL to those left after a grace period, before another driver starts there.
+void end_leftover_driver(const std::string& work) {
+  std::vector<pid_t> left = processes_naming(work);
+  if (left.empty()) return;
+  spdlog::warn("ending {} leftover audit driver process(es) of {}", left.size(), work);
+  for (pid_t pid : left) ::kill(pid, SIGTERM);
+  const auto give_up = Clock::now() + std::chrono::seconds(5);
+  while (!left.empty() && Clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    left = processes_naming(work);
+  }
+  for (pid_t pid : left) ::kill(pid, SIGKILL);
+}
+
+std::string exit_text(int status) {
+  if (WIFEXITED(status)) return "exit code " + std::to_string(WEXITSTATUS(status));
+  if (WIFSIGNALED(status)) return "signal " + std::to_string(WTERMSIG(status));
+  return "status " + std::to_string(status);
 }
 
 Result<engine::AuditResult> hand_off(const AuditHandoffOptions& config, const std::string& job_id, const engine::SceneRecord& snapshot,
@@ -83,6 +130,7 @@ Result<engine::AuditResult> hand_off(const AuditHandoffOptions& config, const st
   if (!checked.ok()) return checked.error();
   const std::string print = audit_fingerprint(job.value().scene, checked.value());
 
+  end_leftover_driver(work);
   const std::string log_path = work + "/driver.log";
   const std::string command = config.command + " --data-dir " + quoted(config.data_dir) + " --job " + quoted(job_path) +
                               " --work-dir " + quoted(work) + " --out " + quoted(work + "/report.json");
@@ -104,38 +152,51 @@ Result<engine::AuditResult> hand_off(const AuditHandoffOptions& config, const st
 
   std::set<std::size_t> taken(options.skip_tiles.begin(), options.skip_tiles.end());
   engine::AuditProgress progress;
+  // As the daemon's own audit counts them: tiles of the floor plan, all done once their broad
+  // phase is (the driver ran it); pairs done as their tiles come back.
+  progress.tiles_total = progress.tiles_done = result.tiles;
+  std::size_t tiles_expected = 0, tiles_taken = 0;
   for (std::size_t t = 0; t < result.tile_pairs.size(); ++t) {
     if (result.tile_pairs[t] == 0) continue;
-    ++progress.tiles_total;
+    ++tiles_expected;
     progress.pairs_total += result.tile_pairs[t];
     if (taken.count(t)) {
-      ++progress.tiles_done;
+      ++tiles_taken;
       progress.pairs_done += result.tile_pairs[t];
     }
   }
+  std::set<std::pair<std::uint32_t, std::uint32_t>> pairs_seen;
   result.clashes.clear();
   const auto t0 = Clock::now();
   std::string bad_tile;
   // Reads every tile the driver has finished since the last look.
+  // A clash the driver reports must be one the plan can hold: objects in range, each pair once,
+  // finite numbers. (The driver is trusted like the daemon for what it leaves out: a pair it does
+  // not report is not recomputed here.)
+  auto plausible = [&](const engine::PairClash& c) {
+    return c.a < c.b && c.b < objects.size() && pairs_seen.insert({c.a, c.b}).second && std::isfinite(c.distance_mm) &&
+           c.distance_mm >= 0.0 && c.point_a.allFinite() && c.point_b.allFinite();
+  };
   auto take_new_tiles = [&] {
     for (std::size_t t = 0; t < result.tile_pairs.size(); ++t) {
-      if (result.tile_pairs[t] == 0 || taken.count(t) || !fs::exists(tile_path(work, t))) continue;
+      std::error_code missing;
+      if (result.tile_pairs[t] == 0 || taken.count(t) || !fs::exists(tile_path(work, t), missing)) continue;
       auto tile = read_tile_file(tile_path(work, t), print, t);
       if (!tile.ok()) {
         bad_tile = tile.error().to_string();
         return;
       }
       taken.insert(t);
-      for (const engine::PairClash& c : tile.value()) {
-        if (c.b >= objects.size() || c.a >= c.b) {
-          bad_tile = tile_path(work, t) + " names objects this snapshot does not have";
+      for (const engine::PairClash& c : tile.value())
+        if (!plausible(c)) {
+          bad_tile = tile_path(work, t) + " holds a clash this audit cannot have (objects out of range, a pair twice, or a number not finite)";
           return;
         }
+      for (const engine::PairClash& c : tile.value())
         if (options.on_clash) options.on_clash(c);
-      }
       if (options.on_tile_done) options.on_tile_done(t, tile.value());
       result.clashes.insert(result.clashes.end(), tile.value().begin(), tile.value().end());
-      ++progress.tiles_done;
+      ++tiles_taken;
       progress.pairs_done += result.tile_pairs[t];
       progress.clashes = result.clashes.size();
       progress.elapsed_s = std::chrono::duration<double>(Clock::now() - t0).count();
@@ -144,34 +205,53 @@ Result<engine::AuditResult> hand_off(const AuditHandoffOptions& config, const st
   };
   if (options.on_progress) options.on_progress(progress);
   int status = 0;
-  bool ended = false, cancelled = false;
-  while (!ended) {
+  bool reaped = false, cancelled = false;
+  std::optional<Clock::time_point> all_in;  // when the last tile came back
+  // Whatever happens below (a bad tile, an exception), the driver does not outlive this call.
+  struct Guard {
+    pid_t pid;
+    bool* reaped;
+    int* status;
+    ~Guard() {
+      if (!*reaped) *status = stop_group(pid, false, *status);
+      *reaped = true;
+    }
+  } guard{pid, &reaped, &status};
+  while (!reaped) {
     if (options.cancel && options.cancel->load()) {
-      status = stop_group(pid);
-      cancelled = true;
-      ended = true;
+      status = stop_group(pid, false, status);
+      reaped = cancelled = true;
     } else if (::waitpid(pid, &status, WNOHANG) == pid) {
-      ended = true;
+      reaped = true;
+      if (group_alive(pid)) status = stop_group(pid, true, status);  // the leader is gone: none of its group stays
     } else {
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
     }
     take_new_tiles();
-    if (!bad_tile.empty()) {
-      if (!ended) stop_group(pid);
-      return failed(bad_tile);
+    if (!bad_tile.empty()) return failed(bad_tile);  // the guard ends the driver
+    if (tiles_taken == tiles_expected && !reaped) {
+      // Every tile is in: the driver's own merge is not needed here. It gets a while to end.
+      if (!all_in) all_in = Clock::now();
+      if (Clock::now() - *all_in > std::chrono::seconds(30)) {
+        spdlog::warn("audit {}: the driver wrote every tile but did not end in 30 s; it is stopped", job_id);
+        status = stop_group(pid, false, status);
+        reaped = true;
+        status = 0;
+      }
     }
   }
   result.pairs_done = progress.pairs_done;
   result.cancelled = cancelled;
   engine::sort_in_pair_order(result.clashes);
   if (cancelled) return result;  // the tiles it finished (the work directory stays, for a resume)
+  if (tiles_taken == tiles_expected && status == 0) {
+    fs::remove_all(work, ec);
+    return result;
+  }
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
-    return failed("'" + config.command + "' ended with status " + std::to_string(status) + "; its log (" + log_path + "):\n" + log_tail(log_path));
-  if (progress.tiles_done != progress.tiles_total)
-    return failed("the driver ended with " + std::to_string(progress.tiles_total - progress.tiles_done) + " tiles missing; its log (" +
-                  log_path + "):\n" + log_tail(log_path));
-  fs::remove_all(work, ec);
-  return result;
+    return failed("'" + config.command + "' ended with " + exit_text(status) + "; its log (" + log_path + "):\n" + log_tail(log_path));
+  return failed("the driver ended with " + std::to_string(tiles_expected - tiles_taken) + " tiles missing; its log (" + log_path +
+                "):\n" + log_tail(log_path));
 }
 
 }  // namespace
