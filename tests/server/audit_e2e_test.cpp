@@ -32,6 +32,7 @@ namespace {
 
 namespace pb = ::gatekeeper::v1;
 using testing::Daemon;
+using testing::get_scene;
 
 struct Placed {
   std::string name, category, group, part;
@@ -79,15 +80,6 @@ CubeScene cube_scene(pb::Gatekeeper::Stub& stub, const std::string& prefix, int 
     *o->mutable_pose() = pose_of({"", "", "", "", where(i)});
   }
   return out;
-}
-
-pb::SceneInfo get_scene(pb::Gatekeeper::Stub& stub, const std::string& scene_id) {
-  grpc::ClientContext ctx;
-  pb::GetSceneRequest get;
-  get.set_scene_id(scene_id);
-  pb::SceneInfo scene;
-  EXPECT_TRUE(stub.GetScene(&ctx, get, &scene).ok());
-  return scene;
 }
 
 std::map<std::pair<std::string, std::string>, pb::Verdict> clash_set(const pb::AuditReport& report) {

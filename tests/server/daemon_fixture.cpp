@@ -125,6 +125,15 @@ gatekeeper::v1::ValidateStepRequest bend_request(double flange_mm, double angle_
   return r;
 }
 
+gatekeeper::v1::SceneInfo get_scene(gatekeeper::v1::Gatekeeper::Stub& stub, const std::string& scene_id) {
+  grpc::ClientContext ctx;
+  gatekeeper::v1::GetSceneRequest get;
+  get.set_scene_id(scene_id);
+  gatekeeper::v1::SceneInfo scene;
+  EXPECT_TRUE(stub.GetScene(&ctx, get, &scene).ok());
+  return scene;
+}
+
 gatekeeper::v1::AuditReport run_audit(gatekeeper::v1::Gatekeeper::Stub& stub, const gatekeeper::v1::StartAuditRequest& start, bool html) {
   namespace pb = ::gatekeeper::v1;
   pb::AuditJob job;

@@ -53,6 +53,9 @@ grpc::Status upload_part(gatekeeper::v1::Gatekeeper::Stub& stub, const std::stri
 gatekeeper::v1::ValidateStepRequest bend_request(double flange_mm, double angle_deg);
 
 // Starts an audit, watches it to its end and returns its report (failures fail the test).
+// The scene as GetScene returns it (a failed call fails the test).
+gatekeeper::v1::SceneInfo get_scene(gatekeeper::v1::Gatekeeper::Stub& stub, const std::string& scene_id);
+
 gatekeeper::v1::AuditReport run_audit(gatekeeper::v1::Gatekeeper::Stub& stub, const gatekeeper::v1::StartAuditRequest& start,
                                       bool html = false);
 

@@ -174,11 +174,7 @@ TEST(ScenesE2E, ADragsAnsweredFramesSurviveAKillInTheMiddleOfTheDrag) {
   }
   Daemon daemon(dir);
   auto stub = daemon.stub();
-  grpc::ClientContext gctx;
-  pb::GetSceneRequest get;
-  get.set_scene_id(scene_id);
-  pb::SceneInfo scene;
-  ASSERT_TRUE(stub->GetScene(&gctx, get, &scene).ok());
+  const pb::SceneInfo scene = testing::get_scene(*stub, scene_id);
   bool found = false;
   for (const auto& o : scene.objects())
     if (o.object_id() == b) {
