@@ -13,7 +13,6 @@ TARGETS=("$@")
 [ ${#TARGETS[@]} -gt 0 ] || TARGETS=(mesh_file_fuzzer shape_file_fuzzer bvh_cache_fuzzer machine_model_fuzzer step_request_fuzzer)
 SHARED="../shared/data"
 bash scripts/install_deps.sh  # clang and libFuzzer on a fresh machine
-export CCACHE_BASEDIR="$PWD" CCACHE_NOHASHDIR=1 CCACHE_MAXSIZE=12G
 
 cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DGATEKEEPER_FUZZ=ON \
   -DGATEKEEPER_BUILD_TESTS=OFF -DGATEKEEPER_BUILD_BENCHMARKS=OFF > /dev/null

@@ -55,7 +55,17 @@ Result<PackedMeshFile> write_packed_mesh(const MeshBvh& bvh, const std::string& 
   file.path = directory + "/" + mesh_content_hash(bvh.mesh()).hex() + ".pack";
   file.bounds = bvh.root_bounds();
   file.triangles = bvh.mesh().triangle_count();
-  const std::string bytes = pack_mesh_bvh(bvh);
+  // One buffer per writing thread, kept between packs of ordinary size: fresh pages for every
+  // pack are faulted in one by one. A buffer grown for a huge part is given back after it.
+  constexpr std::size_t kKeptBufferBytes = std::size_t{64} << 20;
+  thread_local std::string bytes;
+  struct GiveBackHuge {
+    std::string& b;
+    ~GiveBackHuge() {
+      if (b.capacity() > kKeptBufferBytes) std::string().swap(b);
+    }
+  } give_back{bytes};
+  pack_mesh_bvh(bvh, bytes);
   file.bytes = bytes.size();
   file.checksum = pack_checksum(bytes);
   if (same_pack_there(file)) return file;

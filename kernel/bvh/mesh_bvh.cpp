@@ -123,19 +123,20 @@ bool take(std::string_view in, std::size_t& at, T& value) {
 }  // namespace
 
 std::string MeshBvh::serialize() const {
-  std::string out(kSerialMagic, sizeof kSerialMagic);
-  out.reserve(sizeof kSerialMagic + 16 + nodes_.size() * sizeof(BvhNode) + ordered_to_mesh_.size() * 4);
+  std::string out;
+  append_serialized(out);
+  return out;
+}
+
+void MeshBvh::append_serialized(std::string& out) const {
+  static_assert(std::is_trivially_copyable_v<BvhNode> && sizeof(BvhNode) == 6 * sizeof(float) + 2 * sizeof(std::int32_t),
+                "a node's bytes are its fields in order, without padding");
+  out.append(kSerialMagic, sizeof kSerialMagic);
   put(out, static_cast<std::uint64_t>(mesh_->triangle_count()));
   put(out, static_cast<std::int32_t>(nodes_.size()));
   put(out, static_cast<std::int32_t>(depth_));
-  for (const BvhNode& n : nodes_) {
-    for (float v : n.lo) put(out, v);
-    for (float v : n.hi) put(out, v);
-    put(out, n.index);
-    put(out, n.count);
-  }
-  for (std::uint32_t k : ordered_to_mesh_) put(out, k);
-  return out;
+  out.append(reinterpret_cast<const char*>(nodes_.data()), nodes_.size() * sizeof(BvhNode));
+  out.append(reinterpret_cast<const char*>(ordered_to_mesh_.data()), ordered_to_mesh_.size() * sizeof(std::uint32_t));
 }
 
 Result<std::shared_ptr<MeshBvh>> MeshBvh::deserialize(std::shared_ptr<const TriangleMesh> mesh, std::string_view bytes) {

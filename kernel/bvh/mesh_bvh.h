@@ -39,6 +39,8 @@ class MeshBvh {
   // The tree as bytes (nodes, depth, triangle order), and back onto the same mesh without the
   // build. Loading checks every index, so damaged bytes are an error, never a bad tree.
   std::string serialize() const;
+  // The same bytes appended to out (one resize and two block copies: how a pack is written).
+  void append_serialized(std::string& out) const;
   static Result<std::shared_ptr<MeshBvh>> deserialize(std::shared_ptr<const TriangleMesh> mesh, std::string_view bytes);
 
   // The same tree on a copy of the mesh renumbered in tree order (TriangleMesh::in_face_order):

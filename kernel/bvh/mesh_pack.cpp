@@ -19,13 +19,19 @@ Hash128 checksum(std::string_view bytes) {
 }  // namespace
 
 std::string pack_mesh_bvh(const MeshBvh& bvh) {
+  std::string out;
+  pack_mesh_bvh(bvh, out);
+  return out;
+}
+
+void pack_mesh_bvh(const MeshBvh& bvh, std::string& out) {
   // In tree order, so the reader needs no reordering and keeps no second copy of the corners.
   const std::shared_ptr<const MeshBvh> ordered = bvh.in_tree_order();
   const TriangleMesh& mesh = ordered->mesh();
-  // One buffer, sized up front: a pack of millions of triangles is not copied while it grows.
+  // Sized up front: a pack of millions of triangles is not copied while it grows.
   const std::size_t estimate = 256 + mesh.vertices().size() * sizeof(Vec3) + mesh.triangle_count() * (12 + 1 + 4 + 4) +
                                mesh.body_seeds().size() * 4 + static_cast<std::size_t>(ordered->node_count()) * sizeof(BvhNode);
-  std::string out;
+  out.clear();
   out.reserve(estimate);
   out.append(kPackMagic, sizeof kPackMagic);
   const std::size_t size_at = out.size();
@@ -33,11 +39,10 @@ std::string pack_mesh_bvh(const MeshBvh& bvh) {
   mesh.append_bytes(out);
   const std::uint64_t mesh_size = out.size() - size_at - 8;
   std::memcpy(out.data() + size_at, &mesh_size, sizeof mesh_size);
-  out += ordered->serialize();
+  ordered->append_serialized(out);
   const Hash128 sum = checksum(out);
   out.append(reinterpret_cast<const char*>(&sum.low), 8);
   out.append(reinterpret_cast<const char*>(&sum.high), 8);
-  return out;
 }
 
 Hash128 pack_checksum(std::string_view bytes) {

@@ -22,6 +22,9 @@
 namespace gk {
 
 std::string pack_mesh_bvh(const MeshBvh& bvh);
+// The same into out, replacing what it held but keeping its capacity: a writer that packs many
+// meshes reuses one buffer instead of asking the system for fresh pages for each pack.
+void pack_mesh_bvh(const MeshBvh& bvh, std::string& out);
 Result<std::shared_ptr<MeshBvh>> unpack_mesh_bvh(std::string_view bytes);
 // The checksum a pack ends with (what names this pack among all others: a caller that recorded it
 // when writing can tell its pack from another valid one put in its place). Zero for bytes too
