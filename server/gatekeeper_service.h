@@ -65,6 +65,8 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
   WorkPool& upload_pool() { return upload_pool_; }
   WorkPool& cad_upload_pool() { return cad_upload_pool_; }
   WorkPool& scene_pool() { return scene_pool_; }
+  // Drag frames being answered on gRPC's own threads right now (scene_rpcs.cpp's DragReactor).
+  std::atomic<int>& drag_frames_on_grpc_threads() { return drag_frames_on_grpc_threads_; }
   UploadSlots& upload_slots() { return upload_slots_; }
 
   grpc::ServerUnaryReactor* ValidateStep(grpc::CallbackServerContext* ctx, const pb::ValidateStepRequest* request,
@@ -134,6 +136,7 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
   WorkPool upload_pool_;      // finishing mesh uploads
   WorkPool cad_upload_pool_;  // finishing CAD uploads (checked in a child first)
   UploadSlots upload_slots_;
+  std::atomic<int> drag_frames_on_grpc_threads_{0};
 };
 
 }  // namespace gk::server

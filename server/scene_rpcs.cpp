@@ -20,9 +20,18 @@
 namespace gk::server {
 namespace {
 
+// At most this many drag frames, over all streams, are answered on gRPC's own threads at once.
+// Such a frame saves the hand-over to a scene worker and back, about a quarter of a heavy frame's
+// round trip on this machine kind (docs/PERFORMANCE.md, "Layout frame"). It blocks that gRPC
+// thread for one frame (usually a tenth of a millisecond; bounded by the client's deadline and
+// cancel), so only one at a time may, and never a stream's first frame, which places the whole
+// scene (a later frame places it again only when another client edited the scene meanwhile).
+constexpr int kDragFramesOnGrpcThreads = 1;
+
 // The drag stream: each move is stored and answered with its contacts before the next is read.
 // A frame's work runs on the scene pool like a unary move (gRPC's callback thread only hands it
-// over); a full pool ends the stream with RESOURCE_EXHAUSTED, a cancelled client skips the work.
+// over), but for the frames above; a full pool ends the stream with RESOURCE_EXHAUSTED, a
+// cancelled client skips the work.
 class DragReactor final : public grpc::ServerBidiReactor<pb::MoveObjectRequest, pb::MoveResult> {
  public:
   // Each frame is counted as "DragObject.move" (its latency in RpcStats; no call line, a drag
@@ -36,6 +45,13 @@ class DragReactor final : public grpc::ServerBidiReactor<pb::MoveObjectRequest, 
       return end(ctx_->IsCancelled() ? grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the client") : grpc::Status::OK);
     }
     const Call frame = begin_frame(call_, "DragObject.move");
+    std::atomic<int>& on_grpc_threads = service_.drag_frames_on_grpc_threads();
+    if (moved_ && on_grpc_threads.fetch_add(1) < kDragFramesOnGrpcThreads) {
+      answer_frame(frame);  // OnDone cannot run before this reaction returns
+      on_grpc_threads.fetch_sub(1);
+      return;
+    }
+    if (moved_) on_grpc_threads.fetch_sub(1);
     const bool queued = service_.scene_pool().try_submit([this, frame] { answer_frame(frame); });
     if (!queued) {
       service_.stats().record(frame.method, us_since(frame.t0), true);

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <atomic>
 #include <cmath>
 #include <set>
 #include <thread>
@@ -182,6 +183,83 @@ TEST(ScenesE2E, ADragsAnsweredFramesSurviveAKillInTheMiddleOfTheDrag) {
       EXPECT_DOUBLE_EQ(o.pose().translation().x_mm(), 3000.0 - 10.0 * (frames - 1));  // the last frame answered
     }
   EXPECT_TRUE(found);
+}
+
+// Drag frames are answered on gRPC's own threads when no other drag frame is (one at a time), on
+// the scene workers otherwise: streams running at once must each get the answers for their own
+// frames, in order, whichever way each frame went, and other calls are still served meanwhile.
+// The oracle is the boxes' arithmetic: the 100 mm cube dragged along x overlaps its row's still
+// cube at [0, 100] exactly when -100 < x < 100 (the steps never land on a touching position).
+TEST(ScenesE2E, DragsRunningAtOnceAreEachAnsweredForTheirOwnFrames) {
+  Daemon daemon(testing::temp_dir("drags-at-once"));
+  auto stub = daemon.stub();
+  const std::string box = testing::upload_part_id(*stub, testing::box_obj(0, 0, 0, 100, 100, 100), "obj");
+  grpc::ClientContext cctx;
+  pb::SceneInfo scene;
+  ASSERT_TRUE(stub->CreateScene(&cctx, pb::CreateSceneRequest(), &scene).ok());
+  constexpr int kStreams = 4, kFrames = 220;
+  std::vector<std::string> still(kStreams), dragged(kStreams);
+  for (int k = 0; k < kStreams; ++k) {  // one row per stream, 1 m apart in y: rows never meet
+    pb::Pose row = at_x(0.0);
+    row.mutable_translation()->set_y_mm(1000.0 * k);
+    for (auto [id, x] : {std::pair{&still[k], 0.0}, std::pair{&dragged[k], 5000.0}}) {
+      grpc::ClientContext ctx;
+      pb::PutObjectRequest req;
+      req.set_scene_id(scene.scene_id());
+      req.mutable_object()->set_part_id(box);
+      *req.mutable_object()->mutable_pose() = row;
+      req.mutable_object()->mutable_pose()->mutable_translation()->set_x_mm(x);
+      pb::MoveResult r;
+      ASSERT_TRUE(stub->PutObject(&ctx, req, &r).ok());
+      *id = r.object_id();
+    }
+  }
+  std::atomic<int> streams_left{kStreams};
+  std::vector<std::string> failures(kStreams);
+  std::vector<std::thread> drags;
+  for (int k = 0; k < kStreams; ++k)
+    drags.emplace_back([&, k] {
+      grpc::ClientContext dctx;
+      auto drag = stub->DragObject(&dctx);
+      pb::MoveObjectRequest move;
+      move.set_scene_id(scene.scene_id());
+      move.set_object_id(dragged[k]);
+      for (int i = 0; i < kFrames && failures[k].empty(); ++i) {
+        const double x = 3000.0 - 17.0 * i;
+        *move.mutable_pose() = at_x(x);
+        move.mutable_pose()->mutable_translation()->set_y_mm(1000.0 * k);
+        pb::MoveResult r;
+        if (!drag->Write(move) || !drag->Read(&r)) {
+          failures[k] = "stream ended at frame " + std::to_string(i);
+          break;
+        }
+        const bool overlaps = x > -100.0 && x < 100.0;
+        const bool right = r.verdict() == (overlaps ? pb::COLLISION : pb::CLEAR) && r.contacts_size() == (overlaps ? 1 : 0) &&
+                           (!overlaps || r.contacts(0).other_object_id() == still[k]);
+        if (!right) failures[k] = "frame " + std::to_string(i) + " at x " + std::to_string(x) + ": " + r.ShortDebugString();
+      }
+      drag->WritesDone();
+      const grpc::Status end = drag->Finish();
+      if (failures[k].empty() && !end.ok()) failures[k] = "Finish: " + end.error_message();
+      --streams_left;
+    });
+  int reads = 0;
+  while (streams_left > 0) {  // other calls are served while the drags run
+    EXPECT_EQ(testing::get_scene(*stub, scene.scene_id()).objects_size(), 2 * kStreams);
+    ++reads;
+  }
+  for (std::thread& t : drags) t.join();
+  for (int k = 0; k < kStreams; ++k) EXPECT_EQ(failures[k], "") << "stream " << k;
+  EXPECT_GT(reads, 0);
+  // Each dragged cube was stored at its stream's last frame.
+  const pb::SceneInfo after = testing::get_scene(*stub, scene.scene_id());
+  for (const auto& o : after.objects()) {
+    for (int k = 0; k < kStreams; ++k) {
+      if (o.object_id() == dragged[k]) {
+        EXPECT_DOUBLE_EQ(o.pose().translation().x_mm(), 3000.0 - 17.0 * (kFrames - 1));
+      }
+    }
+  }
 }
 
 TEST(ScenesE2E, AuditJobsReportWhatBruteForceFindsAndCancelKeepsPartialResults) {
