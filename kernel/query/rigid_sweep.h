@@ -1,0 +1,40 @@
+// The first contact of a mesh moving between two poses with a static mesh, found by conservative
+// advancement: at motion parameter s the exact mesh distance d bounds how far the motion may go
+// before anything can touch, because no point of the moving mesh travels faster than the motion's
+// rate. So the search never steps over a contact, however thin the static mesh or fast the motion:
+// what checking at the two poses alone misses (a hand passing through a 1 mm plate between frames).
+//
+// The motion between the poses: the rotation turns at a constant rate about the moving mesh's own
+// origin (the shortest way from the first rotation to the second), the translation changes
+// linearly. Its rate, in mm per unit s: |translation change| + angle × the largest distance of a
+// vertex from the mesh's origin.
+#pragma once
+
+#include "kernel/bvh/mesh_bvh.h"
+#include "kernel/core/rigid_transform.h"
+#include "kernel/core/status.h"
+#include "kernel/core/stop_token.h"
+#include "kernel/query/mesh_pair_frame.h"
+
+namespace gk {
+
+// The pose at parameter s in [0, 1] of the motion from `from` to `to`.
+RigidTransform pose_between(const RigidTransform& from, const RigidTransform& to, double s);
+
+struct SweepContact {
+  bool found = false;     // the meshes come within the contact distance somewhere along the motion
+  double s = 1.0;         // the first such parameter (found) [0, 1]
+  double distance_mm = 0.0;  // their distance there (at most the contact distance when found)
+  Vec3 point = Vec3::Zero();  // where they meet (found): the moving mesh's nearest point, world
+  int steps = 0;          // distance queries made
+  QueryStats stats;       // summed over the queries
+};
+
+// The first parameter where moving (from -> to) comes within contact_mm of fixed. Ends with an
+// error when more than max_steps queries would be needed (a motion grazing the mesh all along):
+// the caller must treat that as undecided, never as clear.
+Result<SweepContact> first_contact_along(const MeshBvh& moving, const RigidTransform& from, const RigidTransform& to,
+                                         const MeshBvh& fixed, const RigidTransform& fixed_pose, double contact_mm,
+                                         int max_steps = 20000, const StopToken* stop = nullptr);
+
+}  // namespace gk
