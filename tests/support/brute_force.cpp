@@ -2,6 +2,7 @@
 
 #include "kernel/query/triangle_distance.h"
 #include "kernel/query/triangle_intersection.h"
+#include "kernel/core/aabb.h"
 
 #include <limits>
 #include <vector>
@@ -55,6 +56,35 @@ PairSet brute_force_pairs_within(const TriangleMesh& a, const RigidTransform& po
         out.insert({static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)});
   }
   return out;
+}
+
+bool brute_force_any_within(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
+                            const RigidTransform& pose_b, double delta_mm) {
+  const auto tb = b_in_a_frame(b, relative_transform(pose_a, pose_b));
+  auto box_of = [](const Triangle& t) {
+    Aabb box;
+    for (const Vec3& p : t) box.extend(p);
+    return box;
+  };
+  Aabb all_b;
+  std::vector<Aabb> boxes_b;
+  for (const Triangle& t : tb) {
+    boxes_b.push_back(box_of(t));
+    all_b.extend(boxes_b.back());
+  }
+  auto apart = [delta_mm](const Aabb& x, const Aabb& y) {
+    return ((x.min - y.max).array() > delta_mm).any() || ((y.min - x.max).array() > delta_mm).any();
+  };
+  for (std::size_t i = 0; i < a.triangle_count(); ++i) {
+    const Triangle ta = a.triangle(i);
+    const Aabb box_a = box_of(ta);
+    if (apart(box_a, all_b)) continue;
+    for (std::size_t j = 0; j < tb.size(); ++j) {
+      if (apart(box_a, boxes_b[j])) continue;
+      if (triangles_intersect(ta, tb[j]) || triangle_distance(ta, tb[j]).distance <= delta_mm) return true;
+    }
+  }
+  return false;
 }
 
 }  // namespace gk::testing

@@ -21,4 +21,10 @@ double brute_force_distance(const TriangleMesh& a, const RigidTransform& pose_a,
 PairSet brute_force_pairs_within(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
                                  const RigidTransform& pose_b, double delta_mm);
 
+// Is some triangle pair of the two within delta_mm (an intersecting pair is at 0)? All pairs,
+// except those whose triangles' boxes are farther apart than delta_mm along an axis (exactly
+// dropped: such triangles cannot be within delta_mm) - fast enough for every frame of a path.
+bool brute_force_any_within(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
+                            const RigidTransform& pose_b, double delta_mm);
+
 }  // namespace gk::testing

@@ -15,8 +15,10 @@ namespace gk::testing {
 
 using FclModel = fcl::BVHModel<fcl::OBBRSSd>;
 
-inline std::shared_ptr<FclModel> make_fcl_model(const TriangleMesh& mesh) {
-  auto model = std::make_shared<FclModel>();
+// The mesh as an FCL model of any bounding volume (OBBRSS, or OBB: the RAPID-style peer).
+template <typename BV>
+std::shared_ptr<fcl::BVHModel<BV>> make_fcl_bvh(const TriangleMesh& mesh) {
+  auto model = std::make_shared<fcl::BVHModel<BV>>();
   std::vector<fcl::Vector3d> points;
   for (const Vec3& v : mesh.vertices()) points.emplace_back(v.x(), v.y(), v.z());
   std::vector<fcl::Triangle> triangles;
@@ -26,6 +28,8 @@ inline std::shared_ptr<FclModel> make_fcl_model(const TriangleMesh& mesh) {
   model->endModel();
   return model;
 }
+
+inline std::shared_ptr<FclModel> make_fcl_model(const TriangleMesh& mesh) { return make_fcl_bvh<fcl::OBBRSSd>(mesh); }
 
 inline fcl::Transform3d to_fcl(const RigidTransform& pose) {
   fcl::Transform3d out = fcl::Transform3d::Identity();
