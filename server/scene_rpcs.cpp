@@ -23,9 +23,12 @@ namespace {
 // At most this many drag frames, over all streams, are answered on gRPC's own threads at once.
 // Such a frame saves the hand-over to a scene worker and back, about a quarter of a heavy frame's
 // round trip on this machine kind (docs/PERFORMANCE.md, "Layout frame"). It blocks that gRPC
-// thread for one frame (usually a tenth of a millisecond; bounded by the client's deadline and
-// cancel), so only one at a time may, and never a stream's first frame, which places the whole
-// scene (a later frame places it again only when another client edited the scene meanwhile).
+// thread for one frame, so only short frames may: one whose session is built for this scene,
+// object and clearance and whose parts are all meshes (DragSession::answers_on_triangles: usually
+// a tenth of a millisecond, and it stops on the client's deadline or cancel). A stream's first
+// frame, a switch of object, scene or clearance, and any CAD part go to the scene workers. (A
+// frame can still place the scene again on a gRPC thread when another client edited the scene
+// in the moment before it: one placement, milliseconds at 10,000 objects.)
 constexpr int kDragFramesOnGrpcThreads = 1;
 
 // The drag stream: each move is stored and answered with its contacts before the next is read.
@@ -46,12 +49,14 @@ class DragReactor final : public grpc::ServerBidiReactor<pb::MoveObjectRequest, 
     }
     const Call frame = begin_frame(call_, "DragObject.move");
     std::atomic<int>& on_grpc_threads = service_.drag_frames_on_grpc_threads();
-    if (moved_ && on_grpc_threads.fetch_add(1) < kDragFramesOnGrpcThreads) {
-      answer_frame(frame);  // OnDone cannot run before this reaction returns
-      on_grpc_threads.fetch_sub(1);
+    const bool short_frame = moved_ && session_.answers_on_triangles(request_.scene_id(), request_.object_id(), request_.clearance_mm());
+    if (short_frame && on_grpc_threads.fetch_add(1) < kDragFramesOnGrpcThreads) {
+      // The slot is given back before the reply is written: the next frame, read once the client
+      // has the reply, must find it free (OnDone cannot run before this reaction returns).
+      answer_frame(frame, &on_grpc_threads);
       return;
     }
-    if (moved_) on_grpc_threads.fetch_sub(1);
+    if (short_frame) on_grpc_threads.fetch_sub(1);
     const bool queued = service_.scene_pool().try_submit([this, frame] { answer_frame(frame); });
     if (!queued) {
       service_.stats().record(frame.method, us_since(frame.t0), true);
@@ -65,10 +70,15 @@ class DragReactor final : public grpc::ServerBidiReactor<pb::MoveObjectRequest, 
   void OnDone() override { delete this; }
 
  private:
-  // On a scene worker: the frame's move and contacts, then its reply (or the stream's end).
-  void answer_frame(const Call& frame) {
+  // On a scene worker (or a gRPC thread, holding `slot`, given back before the reply): the frame's
+  // move and contacts, then its reply (or the stream's end).
+  void answer_frame(const Call& frame, std::atomic<int>* slot = nullptr) {
+    auto give_back = [slot] {
+      if (slot) slot->fetch_sub(1);
+    };
     if (ctx_->IsCancelled()) {
       service_.stats().record(frame.method, us_since(frame.t0), true);
+      give_back();
       return end({grpc::StatusCode::CANCELLED, "cancelled by the client"});
     }
     reply_.Clear();
@@ -76,6 +86,7 @@ class DragReactor final : public grpc::ServerBidiReactor<pb::MoveObjectRequest, 
     const grpc::Status s = guarded_status(frame, [&] { return service_.move(request_, &reply_, &session_, stop); });
     service_.stats().record(frame.method, us_since(frame.t0), !s.ok());
     moved_ = true;
+    give_back();
     if (!s.ok()) return end(s);
     StartWrite(&reply_);
   }

@@ -56,8 +56,9 @@ Result<PackedMeshFile> write_packed_mesh(const MeshBvh& bvh, const std::string& 
   file.bounds = bvh.root_bounds();
   file.triangles = bvh.mesh().triangle_count();
   // One buffer per writing thread, kept between packs of ordinary size: fresh pages for every
-  // pack are faulted in one by one. A buffer grown for a huge part is given back after it.
-  constexpr std::size_t kKeptBufferBytes = std::size_t{64} << 20;
+  // pack are faulted in one by one. A buffer grown for a large part (over 16 MB, about 330,000
+  // triangles) is given back after it: what is kept stays outside any memory budget.
+  constexpr std::size_t kKeptBufferBytes = std::size_t{16} << 20;
   thread_local std::string bytes;
   struct GiveBackHuge {
     std::string& b;

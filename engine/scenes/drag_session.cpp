@@ -3,6 +3,7 @@
 #include "engine/scenes/placed_scene.h"
 #include "engine/verdicts/pair_verdict.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace gk::engine {
@@ -23,6 +24,11 @@ Result<MoveOutcome> DragSession::move(const std::string& scene_id, std::uint64_t
   }
   version_ = scene_version;
   return frame(pose, stop);
+}
+
+bool DragSession::answers_on_triangles(const std::string& scene_id, const std::string& object_id, double clearance_mm) const {
+  if (!session_ || scene_id != scene_id_ || object_id != object_id_ || clearance_mm != clearance_mm_) return false;
+  return std::none_of(parts_.begin(), parts_.end(), [](const std::shared_ptr<const LoadedPart>& p) { return p->deflection_mm > 0.0; });
 }
 
 Result<MoveOutcome> DragSession::once(const SceneRecord& scene, const std::string& object_id, double clearance_mm,

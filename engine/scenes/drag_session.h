@@ -30,6 +30,12 @@ class DragSession {
                            const std::function<Result<SceneRecord>()>& read_scene, const std::string& object_id,
                            double clearance_mm, const RigidTransform& pose, PartRegistry& parts, const StopToken& stop = {});
 
+  // Whether a frame for this object and clearance would reuse the session as it is (no scene to
+  // place again, unless another client edited the scene meanwhile) and decide every pair on the
+  // triangles alone (no CAD part, whose exact faces take long and do not stop on a cancel): such a
+  // frame is short, what the server may answer on gRPC's own thread.
+  bool answers_on_triangles(const std::string& scene_id, const std::string& object_id, double clearance_mm) const;
+
   // The object at its stored pose against the scene as it is: one frame of a fresh session.
   static Result<MoveOutcome> once(const SceneRecord& scene, const std::string& object_id, double clearance_mm,
                                   PartRegistry& parts, const StopToken& stop = {});

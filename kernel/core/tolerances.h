@@ -58,6 +58,15 @@ inline constexpr double kStepContactResolutionMm = 1.0e-3;
 // within this of the face plane is not checked against that organ (it is the contact itself). [mm]
 inline constexpr double kIntendedContactMm = 1.0e-2;
 
+// Fixture assembly between frames: an element the assembling element already touches cannot be
+// swept by conservative advancement (it is met at once), so the motion is checked against it at
+// poses no farther apart than this for any point of the assembling element. An element thinner
+// than this, passed through while sliding in contact with it, could go unseen. [mm]
+inline constexpr double kTouchingSweepStepMm = 0.5;
+// ... and at most this many such poses per element and frame; a longer motion in contact is
+// INCONCLUSIVE for that element (a denial), never assumed clear.
+inline constexpr int kTouchingSweepMaxPoses = 1000;
+
 // A step is clamped when the engaged ABA segments press at least this much of the part's upper
 // face (the sheet under the blankholder). [mm^2]
 inline constexpr double kMinClampedAreaMm2 = 1.0;

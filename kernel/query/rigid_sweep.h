@@ -1,8 +1,10 @@
 // The first contact of a mesh moving between two poses with a static mesh, found by conservative
 // advancement: at motion parameter s the exact mesh distance d bounds how far the motion may go
 // before anything can touch, because no point of the moving mesh travels faster than the motion's
-// rate. So the search never steps over a contact, however thin the static mesh or fast the motion:
-// what checking at the two poses alone misses (a hand passing through a 1 mm plate between frames).
+// rate. Each step keeps the meshes at least half the contact distance apart, so the search never
+// steps over a crossing, however thin the static mesh or fast the motion: what checking at the two
+// poses alone misses (a hand passing through a 1 mm plate between frames). A motion whose closest
+// approach lies between half the contact distance and the contact distance may be stepped over.
 //
 // The motion between the poses: the rotation turns at a constant rate about the moving mesh's own
 // origin (the shortest way from the first rotation to the second), the translation changes
@@ -30,7 +32,8 @@ struct SweepContact {
   QueryStats stats;       // summed over the queries
 };
 
-// The first parameter where moving (from -> to) comes within contact_mm of fixed. Ends with an
+// The first parameter where moving (from -> to) is found within contact_mm of fixed (every motion
+// that comes within contact_mm / 2 is, see above). Ends with an
 // error when more than max_steps queries would be needed (a motion grazing the mesh all along):
 // the caller must treat that as undecided, never as clear.
 Result<SweepContact> first_contact_along(const MeshBvh& moving, const RigidTransform& from, const RigidTransform& to,

@@ -206,9 +206,9 @@ void run(const Scenario& s) {
 
   auto session_run = [&](bool sweep_too, Timing& time, engine::AssemblyWork& work, int& wrong, int& colliding, int& between) {
     engine::AssemblySession session(Mat3::Identity());
-    for (const Element& e : s.statics) (void)session.assemble({e.id, e.mesh, e.pose});
+    for (const Element& e : s.statics) (void)session.assemble({e.id, e.mesh, e.pose, {}});
     for (std::size_t f = 0; f < s.path.size(); ++f) {
-      if (f == 0) (void)session.begin_moving({s.moving.id, s.moving.mesh, s.path[f]});
+      if (f == 0) (void)session.begin_moving({s.moving.id, s.moving.mesh, s.path[f], {}});
       const auto t0 = Clock::now();
       auto frame = session.frame(s.path[f], {}, sweep_too);
       time.add(t0);
