@@ -27,8 +27,7 @@ Result<MoveOutcome> DragSession::move(const std::string& scene_id, std::uint64_t
 }
 
 bool DragSession::answers_on_triangles(const std::string& scene_id, const std::string& object_id, double clearance_mm) const {
-  if (!session_ || scene_id != scene_id_ || object_id != object_id_ || clearance_mm != clearance_mm_) return false;
-  return std::none_of(parts_.begin(), parts_.end(), [](const std::shared_ptr<const LoadedPart>& p) { return p->deflection_mm > 0.0; });
+  return session_ && meshes_only_ && scene_id == scene_id_ && object_id == object_id_ && clearance_mm == clearance_mm_;
 }
 
 Result<MoveOutcome> DragSession::once(const SceneRecord& scene, const std::string& object_id, double clearance_mm,
@@ -55,6 +54,7 @@ Result<bool> DragSession::rebuild(const SceneRecord& scene, const std::string& o
   ids_.clear();
   for (const SceneObjectRecord* r : placed.value().records) ids_.push_back(r->id);
   parts_ = placed.value().parts;
+  meshes_only_ = std::none_of(parts_.begin(), parts_.end(), [](const std::shared_ptr<const LoadedPart>& p) { return p->deflection_mm > 0.0; });
   scene_id_ = scene.id;
   object_id_ = object_id;
   clearance_mm_ = clearance_mm;

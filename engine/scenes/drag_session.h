@@ -46,6 +46,7 @@ class DragSession {
 
   std::unique_ptr<LayoutSession> session_;
   std::vector<std::shared_ptr<const LoadedPart>> parts_;  // object index -> part
+  bool meshes_only_ = false;  // no part is CAD (set with parts_: asked every frame, not recounted)
   std::vector<std::string> ids_;  // object index -> id
   std::string scene_id_, object_id_;
   double clearance_mm_ = -1.0;

@@ -17,20 +17,24 @@ RigidTransform pose_between(const RigidTransform& from, const RigidTransform& to
   return out;
 }
 
+MotionBound motion_bound(const MeshBvh& moving, const RigidTransform& from, const RigidTransform& to) {
+  MotionBound b;
+  b.travel_mm = (to.translation - from.translation).norm();
+  b.angle_rad = Eigen::AngleAxisd(to.rotation * from.rotation.transpose()).angle();
+  const Aabb box = moving.root_bounds();
+  for (int k = 0; k < 8; ++k) {
+    const Vec3 corner((k & 1) ? box.max.x() : box.min.x(), (k & 2) ? box.max.y() : box.min.y(), (k & 4) ? box.max.z() : box.min.z());
+    b.reach_mm = std::max(b.reach_mm, corner.norm());
+  }
+  return b;
+}
+
 Result<SweepContact> first_contact_along(const MeshBvh& moving, const RigidTransform& from, const RigidTransform& to,
                                          const MeshBvh& fixed, const RigidTransform& fixed_pose, double contact_mm,
                                          int max_steps, const StopToken* stop) {
   if (!(contact_mm > 0.0) || !std::isfinite(contact_mm)) return invalid_argument("contact_mm", "must be a positive distance");
-  // The motion's rate: no vertex is farther from the mesh's origin than the farthest corner of its box.
-  const Aabb box = moving.root_bounds();
-  double reach = 0.0;
-  for (int k = 0; k < 8; ++k) {
-    const Vec3 corner((k & 1) ? box.max.x() : box.min.x(), (k & 2) ? box.max.y() : box.min.y(), (k & 4) ? box.max.z() : box.min.z());
-    reach = std::max(reach, corner.norm());
-  }
-  const double angle = Eigen::AngleAxisd(to.rotation * from.rotation.transpose()).angle();
   // Rounded up a little: the bound must not be below the true rate.
-  const double rate = ((to.translation - from.translation).norm() + angle * reach) * (1.0 + 1e-12);
+  const double rate = motion_bound(moving, from, to).rate() * (1.0 + 1e-12);
 
   SweepContact out;
   double s = 0.0;

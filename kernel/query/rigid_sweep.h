@@ -23,6 +23,17 @@ namespace gk {
 // The pose at parameter s in [0, 1] of the motion from `from` to `to`.
 RigidTransform pose_between(const RigidTransform& from, const RigidTransform& to, double s);
 
+// What bounds how fast the mesh's points move in that motion: the angle turned [rad], and the
+// largest distance of a vertex from the mesh's origin (that of its box's farthest corner) [mm].
+struct MotionBound {
+  double travel_mm = 0.0;
+  double angle_rad = 0.0;
+  double reach_mm = 0.0;
+  // No point moves faster than this, in mm per unit s.
+  double rate() const { return travel_mm + angle_rad * reach_mm; }
+};
+MotionBound motion_bound(const MeshBvh& moving, const RigidTransform& from, const RigidTransform& to);
+
 struct SweepContact {
   bool found = false;     // the meshes come within the contact distance somewhere along the motion
   double s = 1.0;         // the first such parameter (found) [0, 1]
