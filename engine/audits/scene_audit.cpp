@@ -334,8 +334,9 @@ Result<AuditResult> audit_scene(const std::vector<AuditObject>& objects, const A
     first_object.push_back(i);
     setup.in_memory.push_back(o.mesh);
     // Held in memory: the pack's arrays (the tree reads the mesh's own corners); read through a
-    // mapping of the file. Counted with a margin for the allocations' rounding.
-    setup.bytes.push_back(o.packed ? o.packed->bytes + o.packed->bytes / 8 : 0);
+    // mapping of the file. Counted with a margin for the allocations' rounding, and the node slabs
+    // a distance query fits (kernel/bvh/node_slabs.h).
+    setup.bytes.push_back(o.packed ? o.packed->bytes + o.packed->bytes / 8 + MeshBvh::slab_bytes_at_most(o.packed->triangles) : 0);
     setup.file_bytes.push_back(o.packed ? o.packed->bytes : 0);
   }
   setup.loader = [&objects, &first_object](std::uint32_t m) { return read_packed_mesh(*objects[first_object[m]].packed); };

@@ -241,10 +241,31 @@ OrientedBox MeshBvh::oriented_box() const {
   return oriented_box_;
 }
 
+const NodeSlab* MeshBvh::node_slabs() const {
+  // A small mesh's distance queries are quick without them, and its bytes per triangle are
+  // already the highest (fixed costs, unshared vertices): 20 bytes a node more would pass 100.
+  if (mesh_->triangle_count() < kMinTrianglesForSlabs) return nullptr;
+  if (!slabs_fitted_.load(std::memory_order_acquire)) {
+    std::lock_guard<std::mutex> lock(slabs_mutex_);
+    if (!slabs_fitted_.load(std::memory_order_relaxed)) {
+      slabs_ = fit_node_slabs(nodes_, [this](int k) { return ordered_triangle(k); });
+      slabs_fitted_.store(true, std::memory_order_release);
+    }
+  }
+  return slabs_.data();
+}
+
 void MeshBvh::refit(std::shared_ptr<const TriangleMesh> moved_mesh) {
   {
     std::lock_guard<std::mutex> lock(oriented_box_mutex_);
     oriented_box_fitted_ = false;
+  }
+  {
+    // A refit is never concurrent with queries on the same tree (the caller owns it meanwhile).
+    std::lock_guard<std::mutex> lock(slabs_mutex_);
+    slabs_fitted_.store(false, std::memory_order_release);
+    slabs_.clear();
+    slabs_.shrink_to_fit();
   }
   mesh_ = std::move(moved_mesh);
   reload_vertices();

@@ -6,12 +6,14 @@
 #pragma once
 
 #include "kernel/bvh/bvh_node.h"
+#include "kernel/bvh/node_slabs.h"
 #include "kernel/core/aabb.h"
 #include "kernel/core/geometry_types.h"
 #include "kernel/core/status.h"
 #include "kernel/mesh/oriented_box.h"
 #include "kernel/mesh/triangle_mesh.h"
 
+#include <atomic>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -63,6 +65,17 @@ class MeshBvh {
   // until a refit: a scene's objects share it per mesh instead of fitting it for every move.
   OrientedBox oriented_box() const;
 
+  // One slab per node (kernel/bvh/node_slabs.h), fitted on first use and kept until a refit:
+  // distance queries read them, collision tests do not, so a mesh only ever collided with never
+  // pays their 20 bytes a node. None (nullptr) for a mesh of fewer than kMinTrianglesForSlabs.
+  static constexpr std::size_t kMinTrianglesForSlabs = 4096;
+  const NodeSlab* node_slabs() const;
+  // The most bytes the slabs of a mesh of this many triangles can take (a tree has fewer than two
+  // nodes per triangle): what a memory budget must allow for a mesh that may be distance-queried.
+  static std::size_t slab_bytes_at_most(std::size_t triangles) {
+    return triangles < kMinTrianglesForSlabs ? 0 : 2 * triangles * sizeof(NodeSlab);
+  }
+
   // Tree-ordered triangle k: its corners and its index in the mesh.
   Triangle ordered_triangle(int k) const {
     const TriangleMesh::Face& f = faces_in_order_[k];
@@ -88,6 +101,9 @@ class MeshBvh {
   const TriangleMesh::Face* faces_in_order_ = nullptr;
   const Vec3* vertices_in_order_ = nullptr;
   int depth_ = 0;
+  mutable std::mutex slabs_mutex_;
+  mutable std::vector<NodeSlab> slabs_;
+  mutable std::atomic<bool> slabs_fitted_{false};
   mutable std::mutex oriented_box_mutex_;
   mutable bool oriented_box_fitted_ = false;
   mutable OrientedBox oriented_box_;

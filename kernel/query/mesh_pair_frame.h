@@ -53,6 +53,14 @@ class MeshPairFrame {
   float size_a(int n) const { return na_[n].size(); }
   float size_b(int n) const { return nb_[n].size(); }
 
+  // From now on nodes_lower_bound also measures the gap along each node's slab normal, for the
+  // meshes large enough to have slabs (fits them on their first use). Distance queries call it;
+  // collision tests do not need it.
+  void use_slabs() {
+    sa_ = a_->node_slabs();
+    sb_ = b_->node_slabs();
+  }
+
   // Separating-axis test of node boxes, conservative by the rounding slack.
   bool nodes_overlap(int node_a, int node_b, double margin = 0.0) const {
     const BvhNode& a = na_[node_a];
@@ -88,7 +96,26 @@ class MeshPairFrame {
     // rotations where the boxes' own axes are oblique to each other).
     const double length = d.norm();
     const double along = length - (d.cwiseAbs().dot(ea) + d_in_b.cwiseAbs().dot(eb)) / std::max(length, 1e-300);
-    return std::max(std::max({gap_a.norm(), gap_b.norm(), along}) - slack_, 0.0);
+    double bound = std::max(std::sqrt(std::max(gap_a.squaredNorm(), gap_b.squaredNorm())), along);
+    // Along A's slab normal (in A's frame) and along B's (in B's frame), for the meshes that have
+    // slabs: each side spans its own slab there, the other side what its box and (if it has one)
+    // its slab together allow.
+    const NodeSlab* slab_a = sa_ ? &sa_[node_a] : nullptr;
+    const NodeSlab* slab_b = sb_ ? &sb_[node_b] : nullptr;
+    double along_normals = 0.0;
+    if (slab_a != nullptr) {
+      // Positions relative to A's centre: A spans [lo, hi]; B's centre sits at na . d.
+      const Vec3 na = slab_a->direction();
+      along_normals = interval_gap(slab_a->lo, slab_a->hi, na.dot(d), span_of(b_in_a_.rotation.transpose() * na, slab_b, eb));
+    }
+    if (slab_b != nullptr) {
+      // Positions relative to B's centre: B spans [lo, hi]; A's centre sits at -nb_in_a . d.
+      const Vec3 nb_in_a = b_in_a_.rotation * slab_b->direction();
+      along_normals = std::max(along_normals, interval_gap(slab_b->lo, slab_b->hi, -nb_in_a.dot(d), span_of(nb_in_a, slab_a, ea)));
+    }
+    // Gaps measured along normals of length up to kSlabNormalMaxLength.
+    bound = std::max(bound, along_normals / kSlabNormalMaxLength);
+    return std::max(bound - slack_, 0.0);
   }
 
   // The box bound, tightened when exactly one side is a leaf: the leaf's triangles against the
@@ -116,6 +143,21 @@ class MeshPairFrame {
     return std::max(box, nearest - radius - slack_);
   }
 
+  // A lower bound of the distance between a triangle (given in the node's mesh frame) and anything
+  // in that node: the gap between the triangle's box and the node's, and along the node's slab
+  // normal when slabs are in use. Lets a leaf pair skip the triangles that cannot come closer
+  // than the best distance found so far.
+  double triangle_to_node_a_bound(const Triangle& t_in_a, int node_a) const {
+    return triangle_to_node_bound(t_in_a, na_[node_a], sa_ ? &sa_[node_a] : nullptr);
+  }
+  double triangle_to_node_b_bound(const Triangle& t_in_b, int node_b) const {
+    return triangle_to_node_bound(t_in_b, nb_[node_b], sb_ ? &sb_[node_b] : nullptr);
+  }
+  Triangle a_triangle_in_b(int ordered_a) const {
+    const Triangle t = a_->ordered_triangle(ordered_a);
+    return {a_in_b_.apply(t[0]), a_in_b_.apply(t[1]), a_in_b_.apply(t[2])};
+  }
+
   Triangle b_triangle_in_a(int ordered_b) const {
     const Triangle t = b_->ordered_triangle(ordered_b);
     return {b_in_a_.apply(t[0]), b_in_a_.apply(t[1]), b_in_a_.apply(t[2])};
@@ -139,6 +181,42 @@ class MeshPairFrame {
     // slack must cover as well, or a box lands beside where its triangles are.
     const double off_orthonormal = (b_in_a_.rotation.transpose() * b_in_a_.rotation - Mat3::Identity()).cwiseAbs().maxCoeff();
     slack_ = (tolerances::kBoxSlackRelative + 16.0 * off_orthonormal) * scale;
+  }
+
+  // How far a node reaches along the unit axis u (in the node's own frame), either way from its
+  // centre, bounded by box and slab together: u = alpha n + w, so u.x spans alpha [lo, hi] plus
+  // |w| . e. Any alpha gives a valid bound; the projection on n makes w (and the box's part) least.
+  struct Span {
+    double lo, hi;
+  };
+  static Span span_of(const Vec3& u, const NodeSlab* slab, const Vec3& e) {
+    if (slab == nullptr) {  // the box alone
+      const double box = u.cwiseAbs().dot(e);
+      return {-box, box};
+    }
+    const Vec3 n = slab->direction();
+    const double alpha = u.dot(n);  // n is unit to float precision: close enough to the projection
+    const double box = (u - alpha * n).cwiseAbs().dot(e);
+    const double s0 = alpha * slab->lo, s1 = alpha * slab->hi;
+    return {std::min(s0, s1) - box, std::max(s0, s1) + box};
+  }
+  double triangle_to_node_bound(const Triangle& t, const BvhNode& node, const NodeSlab* slab) const {
+    const Vec3 tmin = t[0].cwiseMin(t[1]).cwiseMin(t[2]), tmax = t[0].cwiseMax(t[1]).cwiseMax(t[2]);
+    double bound = (tmin - node.upper()).cwiseMax(node.lower() - tmax).cwiseMax(0.0).norm();
+    if (slab != nullptr) {
+      const Vec3 n = slab->direction();
+      const Vec3 c = node.center();
+      const double s0 = n.dot(t[0] - c), s1 = n.dot(t[1] - c), s2 = n.dot(t[2] - c);
+      const double gap = std::max({std::min({s0, s1, s2}) - static_cast<double>(slab->hi),
+                                   static_cast<double>(slab->lo) - std::max({s0, s1, s2}), 0.0});
+      bound = std::max(bound, gap / kSlabNormalMaxLength);
+    }
+    return std::max(bound - slack_, 0.0);
+  }
+
+  // The gap between [lo, hi] and the span placed at `offset` along the same axis (0 if they meet).
+  static double interval_gap(float lo, float hi, double offset, const Span& other) {
+    return std::max({offset + other.lo - static_cast<double>(hi), static_cast<double>(lo) - (offset + other.hi), 0.0});
   }
 
   // Every triangle of `leaf` (of `leaf_mesh`) is apart from `box`, a node of the other mesh whose
@@ -167,6 +245,8 @@ class MeshPairFrame {
   const MeshBvh* b_;
   const BvhNode* na_;
   const BvhNode* nb_;
+  const NodeSlab* sa_ = nullptr;  // set by use_slabs()
+  const NodeSlab* sb_ = nullptr;
   RigidTransform pose_a_;
   RigidTransform b_in_a_;
   RigidTransform a_in_b_;

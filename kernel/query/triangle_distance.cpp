@@ -90,7 +90,13 @@ void closest_points_on_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, 
   if (nn > 0.0) {
     const double s = r.cross(d2).dot(n) / nn;
     const double t = r.cross(d1).dot(n) / nn;
-    if (s >= 0.0 && s <= 1.0 && t >= 0.0 && t <= 1.0) consider(p0 + s * d1, q0 + t * d2);
+    if (s >= 0.0 && s <= 1.0 && t >= 0.0 && t <= 1.0) {
+      consider(p0 + s * d1, q0 + t * d2);
+      // Clearly not parallel (sine of the angle above 1e-3): the squared distance is then strictly
+      // convex in (s, t), so a minimum inside both segments is the minimum; the endpoints below
+      // can only matter where the interior parameters are ill-conditioned.
+      if (nn > 1e-6 * d1.squaredNorm() * d2.squaredNorm()) return;
+    }
   }
   consider(p0, closest_point_on_segment(q0, q1, p0));
   consider(p1, closest_point_on_segment(q0, q1, p1));

@@ -16,6 +16,8 @@
 
 #include <fcl/narrowphase/collision.h>
 #include <fcl/narrowphase/distance.h>
+#include <fcl/narrowphase/detail/traversal/collision_node.h>
+#include <fcl/narrowphase/detail/traversal/distance/mesh_distance_traversal_node.h>
 #include <malloc.h>
 
 #include <algorithm>
@@ -44,8 +46,9 @@ struct Subject {
   std::shared_ptr<const gk::TriangleMesh> mesh;
   std::shared_ptr<gk::MeshBvh> ours;
   std::shared_ptr<FclModel> fcl;
-  double build_ms = 0.0, fcl_build_ms = 0.0;
+  double build_ms = 0.0, fcl_build_ms = 0.0, slabs_ms = 0.0;
   double bytes_per_triangle = 0.0;  // heap the mesh with its tree keeps (glibc's count of bytes in use)
+  double slab_bytes_per_triangle = 0.0;  // what the node slabs add once a distance query fits them
 };
 
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
@@ -73,7 +76,12 @@ Subject load(const std::string& relative, double diagonal_mm, int leaf_size) {
   options.leaf_size = leaf_size;
   s.ours = gk::MeshBvh::build(s.mesh, options).value();
   s.build_ms = ms_since(t0);
-  s.bytes_per_triangle = static_cast<double>(mallinfo2().uordblks - heap0) / static_cast<double>(s.mesh->triangle_count());
+  const std::size_t heap1 = mallinfo2().uordblks;
+  s.bytes_per_triangle = static_cast<double>(heap1 - heap0) / static_cast<double>(s.mesh->triangle_count());
+  const auto ts = Clock::now();
+  (void)s.ours->node_slabs();
+  s.slabs_ms = ms_since(ts);
+  s.slab_bytes_per_triangle = static_cast<double>(mallinfo2().uordblks - heap1) / static_cast<double>(s.mesh->triangle_count());
   const auto t1 = Clock::now();
   s.fcl = gk::testing::make_fcl_model(*s.mesh);
   s.fcl_build_ms = ms_since(t1);
@@ -107,6 +115,18 @@ Answer distance_fcl(const Subject& a, const Subject& b, const RigidTransform& pb
   fcl::DistanceResultd res;
   fcl::distance(a.fcl.get(), fcl::Transform3d::Identity(), b.fcl.get(), to_fcl(pb), req, res);
   return {std::max(res.min_distance, 0.0), res.min_distance <= 0.0};
+}
+
+// FCL's work on the same distance query (BV pairs and triangle pairs tested), in a pass of its own
+// so that counting does not weigh on the timed one.
+std::pair<long long, long long> distance_fcl_work(const Subject& a, const Subject& b, const RigidTransform& pb) {
+  const fcl::DistanceRequestd req(true);
+  fcl::DistanceResultd res;
+  fcl::detail::MeshDistanceTraversalNodeOBBRSS<double> node;
+  fcl::detail::initialize(node, *a.fcl, fcl::Transform3d::Identity(), *b.fcl, to_fcl(pb), req, res);
+  node.enable_statistics = true;
+  fcl::detail::distance(&node);
+  return {node.num_bv_tests, node.num_leaf_tests};
 }
 
 struct Stats {
@@ -184,7 +204,7 @@ int main(int argc, char** argv) {
                                           {"near", &near}}) {
       std::vector<double> c_ours, c_fcl, d_ours, d_fcl, dfree_ours, dfree_fcl;
       int agree_c = 0, agree_d = 0;
-      double d_node_pairs = 0.0, d_triangle_pairs = 0.0;
+      double d_node_pairs = 0.0, d_triangle_pairs = 0.0, fcl_bv_pairs = 0.0, fcl_triangle_pairs = 0.0;
       for (const RigidTransform& pose : *poses) {
         auto t0 = Clock::now();
         const Answer co = collide_ours(a, b, pose);
@@ -202,6 +222,9 @@ int main(int argc, char** argv) {
         const Answer df = distance_fcl(a, b, pose);
         const double dfu = ms_since(t0) * 1e3;
         d_fcl.push_back(dfu);
+        const auto [bv_pairs, leaf_pairs] = distance_fcl_work(a, b, pose);
+        fcl_bv_pairs += static_cast<double>(bv_pairs);
+        fcl_triangle_pairs += static_cast<double>(leaf_pairs);
         if (!co.collides) {
           dfree_ours.push_back(du);
           dfree_fcl.push_back(dfu);
@@ -231,14 +254,21 @@ int main(int argc, char** argv) {
       line("collide", c_ours, c_fcl, agree_c, poses->size());
       line("distance", d_ours, d_fcl, agree_d, poses->size());
       line("dist_free", dfree_ours, dfree_fcl, static_cast<int>(dfree_ours.size()), dfree_ours.size());
-      std::printf("%-44s %-8s %-10s node pairs %.0f, triangle pairs %.0f per distance query (ours)\n", label.c_str(), pose_kind,
-                  "work", d_node_pairs / static_cast<double>(poses->size()), d_triangle_pairs / static_cast<double>(poses->size()));
+      const double n = static_cast<double>(poses->size());
+      std::printf("%-44s %-8s %-10s node pairs %.0f, triangle pairs %.0f per distance query (ours); FCL %.0f and %.0f\n",
+                  label.c_str(), pose_kind, "work", d_node_pairs / n, d_triangle_pairs / n, fcl_bv_pairs / n, fcl_triangle_pairs / n);
     }
   }
-  std::printf("\n%-36s %10s %10s %12s %12s %10s\n", "mesh", "triangles", "build_ms", "M_tri/s", "fcl_build_ms", "B/triangle");
-  for (const auto& [key, s] : subjects)
-    std::printf("%-36s %10zu %10.1f %12.2f %12.1f %10.0f\n", s.name.c_str(), s.mesh->triangle_count(), s.build_ms,
-                static_cast<double>(s.mesh->triangle_count()) / (s.build_ms * 1e3), s.fcl_build_ms, s.bytes_per_triangle);
+  // Slabs are fitted on a mesh's first distance query (not by collision tests): their time and
+  // bytes on columns of their own, and the rate and bytes with them.
+  std::printf("\n%-36s %10s %10s %12s %12s %10s %9s %10s %14s %12s\n", "mesh", "triangles", "build_ms", "M_tri/s", "fcl_build_ms",
+              "B/triangle", "slabs_ms", "slabs_B/tri", "M_tri/s_slabs", "B/tri_slabs");
+  for (const auto& [key, s] : subjects) {
+    const double n = static_cast<double>(s.mesh->triangle_count());
+    std::printf("%-36s %10zu %10.1f %12.2f %12.1f %10.0f %9.1f %10.0f %14.2f %12.0f\n", s.name.c_str(), s.mesh->triangle_count(),
+                s.build_ms, n / (s.build_ms * 1e3), s.fcl_build_ms, s.bytes_per_triangle, s.slabs_ms, s.slab_bytes_per_triangle,
+                n / ((s.build_ms + s.slabs_ms) * 1e3), s.bytes_per_triangle + s.slab_bytes_per_triangle);
+  }
   std::printf("\nworst ratio (min of mean, median): %.2f on %s\nanswer hash %016llx\n", worst_ratio, worst_line.c_str(),
               static_cast<unsigned long long>(hash.h));
   return 0;

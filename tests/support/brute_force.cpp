@@ -20,7 +20,50 @@ std::vector<Triangle> b_in_a_frame(const TriangleMesh& b, const RigidTransform& 
   return out;
 }
 
+Aabb box_of(const Triangle& t) {
+  Aabb box;
+  for (const Vec3& p : t) box.extend(p);
+  return box;
+}
+
+// Apart along some axis by more than `gap` (with the margin for rounding).
+bool boxes_apart_by_more_than(const Aabb& x, const Aabb& y, double gap) {
+  const double limit = gap * (1.0 + 1e-12);
+  return ((x.min - y.max).array() > limit).any() || ((y.min - x.max).array() > limit).any();
+}
+
 }  // namespace
+
+double brute_force_distance_pruned(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
+                                   const RigidTransform& pose_b) {
+  const auto tb = b_in_a_frame(b, relative_transform(pose_a, pose_b));
+  std::vector<Aabb> boxes_b;
+  for (const Triangle& t : tb) boxes_b.push_back(box_of(t));
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < a.triangle_count(); ++i) {
+    const Triangle ta = a.triangle(i);
+    const Aabb box_a = box_of(ta);
+    for (std::size_t j = 0; j < tb.size(); ++j)
+      if (!boxes_apart_by_more_than(box_a, boxes_b[j], best)) best = std::min(best, triangle_distance(ta, tb[j]).distance);
+  }
+  return best;
+}
+
+PairSet brute_force_pairs_within_pruned(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
+                                        const RigidTransform& pose_b, double delta_mm) {
+  const auto tb = b_in_a_frame(b, relative_transform(pose_a, pose_b));
+  std::vector<Aabb> boxes_b;
+  for (const Triangle& t : tb) boxes_b.push_back(box_of(t));
+  PairSet out;
+  for (std::size_t i = 0; i < a.triangle_count(); ++i) {
+    const Triangle ta = a.triangle(i);
+    const Aabb box_a = box_of(ta);
+    for (std::size_t j = 0; j < tb.size(); ++j)
+      if (!boxes_apart_by_more_than(box_a, boxes_b[j], delta_mm) && triangle_distance(ta, tb[j]).distance <= delta_mm)
+        out.insert({static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)});
+  }
+  return out;
+}
 
 PairSet brute_force_contacts(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
                              const RigidTransform& pose_b) {

@@ -27,4 +27,13 @@ PairSet brute_force_pairs_within(const TriangleMesh& a, const RigidTransform& po
 bool brute_force_any_within(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
                             const RigidTransform& pose_b, double delta_mm);
 
+// The same answers as brute_force_distance and brute_force_pairs_within for meshes of thousands of
+// triangles: every pair, except those whose triangles' boxes are apart along an axis by more than
+// the best distance so far (or delta_mm), with a relative margin of 1e-12 for the subtraction's
+// rounding - such a pair cannot be nearer. No tree involved.
+double brute_force_distance_pruned(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
+                                   const RigidTransform& pose_b);
+PairSet brute_force_pairs_within_pruned(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
+                                        const RigidTransform& pose_b, double delta_mm);
+
 }  // namespace gk::testing

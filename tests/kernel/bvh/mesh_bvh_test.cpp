@@ -2,6 +2,7 @@
 // (also at factory coordinates, where float spacing is millimetres' hundredths), and a refit after
 // the vertices move gives the same answers as a rebuild.
 #include "kernel/bvh/mesh_bvh.h"
+#include "kernel/core/tolerances.h"
 #include "kernel/query/mesh_collision.h"
 #include "kernel/query/mesh_distance.h"
 #include "tests/support/brute_force.h"
@@ -92,6 +93,87 @@ TEST(MeshBvh, FloatBoxesHoldDoubleCoordinatesAtFactoryOffsets) {
   }
 }
 
+// Every corner of every triangle under a node lies within the node's slab, computed here in long
+// double from the corner's own coordinates; the queries allow kBoxSlackRelative of the largest
+// coordinate for their own rounding, so that is the only tolerance. Also after a refit, and not at
+// all (no slabs) for a mesh below kMinTrianglesForSlabs.
+void expect_slabs_hold_their_corners(const MeshBvh& bvh) {
+  const NodeSlab* slabs = bvh.node_slabs();
+  ASSERT_NE(slabs, nullptr);
+  const Aabb bounds = bvh.root_bounds();
+  const long double slack =
+      tolerances::kBoxSlackRelative * std::max({bounds.min.cwiseAbs().maxCoeff(), bounds.max.cwiseAbs().maxCoeff(), 1.0});
+  for (int n = 0; n < bvh.node_count(); ++n) {
+    const NodeSlab& slab = slabs[n];
+    EXPECT_LE(slab.direction().norm(), kSlabNormalMaxLength);
+    EXPECT_LE(slab.lo, slab.hi);
+    const BvhNode& node = bvh.node(n);
+    const long double centre[3] = {0.5L * ((long double)node.lo[0] + node.hi[0]), 0.5L * ((long double)node.lo[1] + node.hi[1]),
+                                   0.5L * ((long double)node.lo[2] + node.hi[2])};
+    std::vector<int> stack{n};
+    while (!stack.empty()) {
+      const BvhNode& sub = bvh.node(stack.back());
+      const int m = stack.back();
+      stack.pop_back();
+      if (!sub.is_leaf()) {
+        stack.push_back(m + 1);
+        stack.push_back(sub.second_child());
+        continue;
+      }
+      for (int k = sub.first_triangle(); k <= sub.last_triangle(); ++k)
+        for (const Vec3& v : bvh.mesh().triangle(bvh.mesh_triangle_index(k))) {
+          long double s = 0.0L;
+          for (int a = 0; a < 3; ++a) s += (long double)slab.normal[a] * ((long double)v[a] - centre[a]);
+          EXPECT_GE(s, (long double)slab.lo - slack) << "node " << n;
+          EXPECT_LE(s, (long double)slab.hi + slack) << "node " << n;
+        }
+    }
+  }
+}
+
+TEST(MeshBvh, NodeSlabsHoldEveryCornerOfTheirTrianglesAtFactoryOffsets) {
+  Rng rng(12);
+  for (double offset : {0.0, 25000.0, -25000.0, 1.0e6, 9.9e6}) {
+    // 8,192 triangles (five subdivisions): above kMinTrianglesForSlabs.
+    auto blob = testing::random_closed_blob(rng, 5, 40.0, 0.3, Vec3(offset, -offset / 3.0, offset / 7.0));
+    ASSERT_GE(blob.triangle_count(), MeshBvh::kMinTrianglesForSlabs);
+    for (int leaf_size : {1, 4, 7}) {
+      auto bvh = MeshBvh::build(testing::share(blob), {leaf_size}).value();
+      expect_slabs_hold_their_corners(*bvh);
+    }
+  }
+  // A flat sheet (every slab at its thinnest) and a soup of needles in all directions.
+  std::vector<Vec3> vertices;
+  std::vector<TriangleMesh::Face> faces;
+  const int side = 50;
+  for (int i = 0; i <= side; ++i)
+    for (int j = 0; j <= side; ++j) vertices.push_back(Vec3(1.0e6 + 3.0 * i, 2.0 * j + 0.01 * i * j, 0.7 * i - 0.3 * j));
+  for (int i = 0; i < side; ++i)
+    for (int j = 0; j < side; ++j) {
+      const auto v = static_cast<std::uint32_t>(i * (side + 1) + j);
+      faces.push_back({v, v + 1, v + side + 1});
+      faces.push_back({v + 1, v + side + 2, v + side + 1});
+    }
+  expect_slabs_hold_their_corners(*MeshBvh::build(testing::share(TriangleMesh::create(vertices, faces).value())).value());
+  expect_slabs_hold_their_corners(*MeshBvh::build(testing::share(testing::random_soup(rng, 5000, 300.0, 40.0))).value());
+  // Below the size: none.
+  EXPECT_EQ(MeshBvh::build(testing::share(testing::random_soup(rng, 4000, 300.0, 4.0))).value()->node_slabs(), nullptr);
+}
+
+TEST(MeshBvh, NodeSlabsAreFittedAgainAfterARefit) {
+  Rng rng(13);
+  auto original = testing::random_closed_blob(rng, 5, 40.0, 0.3, Vec3::Zero());
+  auto bvh = MeshBvh::build(testing::share(original)).value();
+  expect_slabs_hold_their_corners(*bvh);
+  std::vector<Vec3> moved = original.vertices();
+  std::normal_distribution<double> jitter(0.0, 4.0);
+  for (Vec3& v : moved) v += Vec3(jitter(rng), jitter(rng), jitter(rng));
+  auto mesh = original;
+  ASSERT_TRUE(mesh.set_vertices(moved).ok());
+  bvh->refit(testing::share(std::move(mesh)));
+  expect_slabs_hold_their_corners(*bvh);
+}
+
 TEST(MeshBvh, InvalidOptionsAreErrors) {
   Rng rng(1);
   auto mesh = testing::share(testing::random_soup(rng, 10, 5.0, 1.0));
@@ -140,7 +222,7 @@ namespace {
 
 TEST(MeshBvhSerialization, ARoundTripAnswersLikeTheBuiltTreeAndDamageIsRefused) {
   testing::Rng rng(21);
-  auto mesh = testing::share(testing::random_closed_blob(rng, 4, 40.0, 0.3, Vec3::Zero()));
+  auto mesh = testing::share(testing::random_closed_blob(rng, 5, 40.0, 0.3, Vec3::Zero()));
   const auto built = MeshBvh::build(mesh).value();
   const std::string bytes = built->serialize();
   const auto loaded = MeshBvh::deserialize(mesh, bytes).value();

@@ -4,6 +4,7 @@
 #include "kernel/query/mesh_collision.h"
 #include "kernel/query/mesh_distance.h"
 #include "tests/support/brute_force.h"
+#include "tests/support/near_contact_poses.h"
 #include "tests/support/random_meshes.h"
 
 #include <gtest/gtest.h>
@@ -190,6 +191,58 @@ TEST(MeshQueriesBruteForce, RotationsRoundedToNineDecimalsKeepEveryContactAtFact
   }
   EXPECT_GT(accepted, 150);
   EXPECT_GT(crossing, 100);
+}
+
+// Meshes of thousands of triangles have node slabs (kernel/bvh/node_slabs.h), which distance
+// queries and pairs_within prune with, and leaf pairs skip triangles by their bound against the
+// other leaf. Both meshes with slabs or one, near contact (gaps -1...3 mm) and random poses, at the
+// origin and at factory offsets: the all-pairs minimum and pair set, no tree involved.
+TEST(MeshQueriesBruteForce, DistanceAndPairsWithinPrunedBySlabsEqualTheAllPairsAnswers) {
+  Rng rng(77);
+  const auto big_a = MeshBvh::build(testing::share(testing::random_closed_blob(rng, 5, 60.0, 0.6, Vec3::Zero()))).value();
+  const auto big_b = MeshBvh::build(testing::share(testing::random_closed_blob(rng, 5, 35.0, 0.6, Vec3::Zero()))).value();
+  const auto small = MeshBvh::build(testing::share(testing::random_closed_blob(rng, 2, 20.0, 0.5, Vec3::Zero()))).value();
+  ASSERT_NE(big_a->node_slabs(), nullptr);
+  ASSERT_NE(big_b->node_slabs(), nullptr);
+  ASSERT_EQ(small->node_slabs(), nullptr);
+  const std::vector<RigidTransform> near_big = testing::near_contact_poses(*big_a, *big_b, 5u, 6);
+  const std::vector<RigidTransform> near_small = testing::near_contact_poses(*big_a, *small, 6u, 6);
+  int apart = 0, touching = 0;
+  for (int round = 0; round < 18; ++round) {
+    const bool with_small = round % 3 == 2;
+    const MeshBvh& b = with_small ? *small : *big_b;
+    RigidTransform relative;
+    if (round < 12) {
+      relative = (with_small ? near_small : near_big)[static_cast<std::size_t>(round / 2)];
+    } else {
+      relative = testing::random_pose(rng, 110.0);
+    }
+    RigidTransform pose_a = testing::random_pose(rng, 50.0);
+    if (round % 2 == 1) pose_a.translation += Vec3(1.0e6, -3.3e5, 1.4e5);
+    const RigidTransform pose_b = pose_a * relative;
+    // The small mesh as A every other time it is used: slabs on B's side only.
+    const bool small_first = with_small && round % 2 == 0;
+    const MeshBvh& first = small_first ? b : *big_a;
+    const MeshBvh& second = small_first ? *big_a : b;
+    const RigidTransform& pose_first = small_first ? pose_b : pose_a;
+    const RigidTransform& pose_second = small_first ? pose_a : pose_b;
+
+    const double truth = testing::brute_force_distance_pruned(first.mesh(), pose_first, second.mesh(), pose_second);
+    const DistanceResult d = distance(first, pose_first, second, pose_second).value();
+    ASSERT_TRUE(d.found);
+    EXPECT_NEAR(d.distance_mm, truth, 1e-12 * std::max(1.0, truth) + 1e-12 * pose_a.translation.norm()) << "round " << round;
+    (truth > 0.0 ? apart : touching) += 1;
+
+    const double delta = 1.0;
+    const PairSet within = testing::brute_force_pairs_within_pruned(first.mesh(), pose_first, second.mesh(), pose_second, delta);
+    const ProximityResult got = pairs_within(first, pose_first, second, pose_second, delta).value();
+    PairSet got_set;
+    for (const ProximityPair& p : got.pairs) got_set.insert({p.triangle_a, p.triangle_b});
+    EXPECT_EQ(got_set, within) << "round " << round;
+  }
+  // Both outcomes, or the test proves little.
+  EXPECT_GT(apart, 5);
+  EXPECT_GE(touching, 2);
 }
 
 TEST(MeshQueriesBruteForce, BadPosesAndRequestsAreErrorsNamingTheField) {
