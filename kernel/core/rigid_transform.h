@@ -34,10 +34,17 @@ struct RigidTransform {
 
   bool is_finite() const { return rotation.allFinite() && translation.allFinite(); }
 
+  // How far the rotation is from orthonormal: the largest entry of |R^T R - I| (0 for the
+  // identity, checked first: many poses have no rotation).
+  double off_orthonormality() const {
+    if (rotation == Mat3::Identity()) return 0.0;
+    return (rotation.transpose() * rotation - Mat3::Identity()).cwiseAbs().maxCoeff();
+  }
+
   bool is_rigid() const {
     if (!is_finite()) return false;
-    const double off = (rotation.transpose() * rotation - Mat3::Identity()).cwiseAbs().maxCoeff();
-    return off <= tolerances::kRotationOrthonormality && rotation.determinant() > 0.0;
+    if (rotation == Mat3::Identity()) return true;
+    return off_orthonormality() <= tolerances::kRotationOrthonormality && rotation.determinant() > 0.0;
   }
 };
 

@@ -13,14 +13,27 @@ struct NodePair {
   int a, b;
 };
 
+// Leaves up to this size get their triangles bounded one by one against the other leaf before
+// their pairs are tested (the default leaf holds 4).
+constexpr int kMaxLeafTrianglesBounded = 8;
+
 // Tests the triangles of two overlapping leaves; returns false when the traversal should stop.
 bool test_leaves(const MeshPairFrame& frame, int leaf_a, int leaf_b, const CollisionRequest& request,
                  CollisionResult& result) {
   const MeshBvh& a = frame.a();
   const MeshBvh& b = frame.b();
+  // A triangle apart from the other leaf (box or slab) meets none of its triangles.
+  std::array<bool, kMaxLeafTrianglesBounded> a_apart{};
+  const int first_a = frame.begin_a(leaf_a), count_a = frame.end_a(leaf_a) - first_a + 1;
+  const bool bound_a = count_a <= kMaxLeafTrianglesBounded;
+  if (bound_a)
+    for (int i = 0; i < count_a; ++i)
+      a_apart[static_cast<std::size_t>(i)] = frame.triangle_to_node_b_bound(frame.a_triangle_in_b(first_a + i), leaf_b) > 0.0;
   for (int kb = frame.begin_b(leaf_b); kb <= frame.end_b(leaf_b); ++kb) {
     const Triangle tb = frame.b_triangle_in_a(kb);
-    for (int ka = frame.begin_a(leaf_a); ka <= frame.end_a(leaf_a); ++ka) {
+    if (frame.triangle_to_node_a_bound(tb, leaf_a) > 0.0) continue;
+    for (int ka = first_a; ka <= frame.end_a(leaf_a); ++ka) {
+      if (bound_a && a_apart[static_cast<std::size_t>(ka - first_a)]) continue;
       ++result.stats.triangle_pairs_tested;
       const Triangle ta = a.ordered_triangle(ka);
       const TriangleIntersection hit = intersect_triangles(ta, tb);
@@ -51,7 +64,8 @@ Result<CollisionResult> collide(const MeshBvh& a, const RigidTransform& pose_a, 
                                 const RigidTransform& pose_b, const CollisionRequest& request) {
   auto made = MeshPairFrame::make(a, pose_a, b, pose_b);
   if (!made.ok()) return made.error();
-  const MeshPairFrame& frame = made.value();
+  MeshPairFrame& frame = made.value();
+  frame.use_slabs();
   CollisionResult result;
 
   // Depth-first over node pairs; the stack never holds more than depth(A) + depth(B) + 2 entries.
@@ -62,7 +76,7 @@ Result<CollisionResult> collide(const MeshBvh& a, const RigidTransform& pose_a, 
     const NodePair p = stack[--top];
     if ((result.stats.node_pairs_tested++ & kStopCheckMask) == 0 && request.stop && request.stop->stop_requested())
       return stopped("the collision query");
-    if (!frame.nodes_overlap(p.a, p.b)) continue;
+    if (!frame.nodes_overlap(p.a, p.b) || frame.slabs_separate(p.a, p.b)) continue;
     const bool leaf_a = frame.is_leaf_a(p.a), leaf_b = frame.is_leaf_b(p.b);
     if (leaf_a && leaf_b) {
       if (!test_leaves(frame, p.a, p.b, request, result)) break;

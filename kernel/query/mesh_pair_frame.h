@@ -53,9 +53,8 @@ class MeshPairFrame {
   float size_a(int n) const { return na_[n].size(); }
   float size_b(int n) const { return nb_[n].size(); }
 
-  // From now on nodes_lower_bound also measures the gap along each node's slab normal, for the
-  // meshes large enough to have slabs (fits them on their first use). Distance queries call it;
-  // collision tests do not need it.
+  // From now on nodes_lower_bound and slabs_separate measure the gap along each node's slab
+  // normal, for the meshes large enough to have slabs (fits them on their first use).
   void use_slabs() {
     sa_ = a_->node_slabs();
     sb_ = b_->node_slabs();
@@ -97,25 +96,16 @@ class MeshPairFrame {
     const double length = d.norm();
     const double along = length - (d.cwiseAbs().dot(ea) + d_in_b.cwiseAbs().dot(eb)) / std::max(length, 1e-300);
     double bound = std::max(std::sqrt(std::max(gap_a.squaredNorm(), gap_b.squaredNorm())), along);
-    // Along A's slab normal (in A's frame) and along B's (in B's frame), for the meshes that have
-    // slabs: each side spans its own slab there, the other side what its box and (if it has one)
-    // its slab together allow.
-    const NodeSlab* slab_a = sa_ ? &sa_[node_a] : nullptr;
-    const NodeSlab* slab_b = sb_ ? &sb_[node_b] : nullptr;
-    double along_normals = 0.0;
-    if (slab_a != nullptr) {
-      // Positions relative to A's centre: A spans [lo, hi]; B's centre sits at na . d.
-      const Vec3 na = slab_a->direction();
-      along_normals = interval_gap(slab_a->lo, slab_a->hi, na.dot(d), span_of(b_in_a_.rotation.transpose() * na, slab_b, eb));
-    }
-    if (slab_b != nullptr) {
-      // Positions relative to B's centre: B spans [lo, hi]; A's centre sits at -nb_in_a . d.
-      const Vec3 nb_in_a = b_in_a_.rotation * slab_b->direction();
-      along_normals = std::max(along_normals, interval_gap(slab_b->lo, slab_b->hi, -nb_in_a.dot(d), span_of(nb_in_a, slab_a, ea)));
-    }
-    // Gaps measured along normals of length up to kSlabNormalMaxLength.
-    bound = std::max(bound, along_normals / kSlabNormalMaxLength);
+    bound = std::max(bound, slab_gap(node_a, node_b, d));
     return std::max(bound - slack_, 0.0);
+  }
+
+  // True when the nodes' slabs (in use and fitted) put them apart by more than the rounding slack:
+  // no triangle of one can meet a triangle of the other. Asked after the boxes overlap.
+  bool slabs_separate(int node_a, int node_b) const {
+    if (sa_ == nullptr && sb_ == nullptr) return false;
+    const Vec3 d = b_in_a_.apply(nb_[node_b].center()) - na_[node_a].center();
+    return slab_gap(node_a, node_b, d) > slack_;
   }
 
   // The box bound, tightened when exactly one side is a leaf: the leaf's triangles against the
@@ -179,8 +169,30 @@ class MeshPairFrame {
     // written with 9 decimals), while the node tests assume an orthonormal R (a transpose for the
     // inverse, unit axes): their error is then about |R^T R - I| times the coordinates, which the
     // slack must cover as well, or a box lands beside where its triangles are.
-    const double off_orthonormal = (b_in_a_.rotation.transpose() * b_in_a_.rotation - Mat3::Identity()).cwiseAbs().maxCoeff();
+    // With A unrotated (the usual case), the relative rotation is B's, exactly.
+    const double off_orthonormal = pose_a.rotation == Mat3::Identity() ? pose_b.off_orthonormality() : b_in_a_.off_orthonormality();
     slack_ = (tolerances::kBoxSlackRelative + 16.0 * off_orthonormal) * scale;
+  }
+
+  // The gap along A's slab normal (in A's frame) and along B's (in B's frame), for the meshes that
+  // have slabs: each side spans its own slab there, the other side what its box and (if it has
+  // one) its slab together allow. d: B's centre minus A's, in A's frame. 0 without slabs.
+  double slab_gap(int node_a, int node_b, const Vec3& d) const {
+    const NodeSlab* slab_a = sa_ ? &sa_[node_a] : nullptr;
+    const NodeSlab* slab_b = sb_ ? &sb_[node_b] : nullptr;
+    double gap = 0.0;
+    if (slab_a != nullptr) {
+      // Positions relative to A's centre: A spans [lo, hi]; B's centre sits at na . d.
+      const Vec3 na = slab_a->direction();
+      gap = interval_gap(slab_a->lo, slab_a->hi, na.dot(d), span_of(b_in_a_.rotation.transpose() * na, slab_b, nb_[node_b].half_extent()));
+    }
+    if (slab_b != nullptr) {
+      // Positions relative to B's centre: B spans [lo, hi]; A's centre sits at -nb_in_a . d.
+      const Vec3 nb_in_a = b_in_a_.rotation * slab_b->direction();
+      gap = std::max(gap, interval_gap(slab_b->lo, slab_b->hi, -nb_in_a.dot(d), span_of(nb_in_a, slab_a, na_[node_a].half_extent())));
+    }
+    // Gaps measured along normals of length up to kSlabNormalMaxLength.
+    return gap / kSlabNormalMaxLength;
   }
 
   // How far a node reaches along the unit axis u (in the node's own frame), either way from its

@@ -49,6 +49,24 @@ double brute_force_distance_pruned(const TriangleMesh& a, const RigidTransform& 
   return best;
 }
 
+PairSet brute_force_contacts_pruned(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
+                                    const RigidTransform& pose_b) {
+  const auto tb = b_in_a_frame(b, relative_transform(pose_a, pose_b));
+  std::vector<Aabb> boxes_b;
+  for (const Triangle& t : tb) boxes_b.push_back(box_of(t));
+  PairSet out;
+  for (std::size_t i = 0; i < a.triangle_count(); ++i) {
+    const Triangle ta = a.triangle(i);
+    const Aabb box_a = box_of(ta);
+    for (std::size_t j = 0; j < tb.size(); ++j) {
+      const Aabb& box_b = boxes_b[j];
+      if (((box_a.min - box_b.max).array() > 0.0).any() || ((box_b.min - box_a.max).array() > 0.0).any()) continue;
+      if (triangles_intersect(ta, tb[j])) out.insert({static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)});
+    }
+  }
+  return out;
+}
+
 PairSet brute_force_pairs_within_pruned(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
                                         const RigidTransform& pose_b, double delta_mm) {
   const auto tb = b_in_a_frame(b, relative_transform(pose_a, pose_b));
@@ -104,11 +122,6 @@ PairSet brute_force_pairs_within(const TriangleMesh& a, const RigidTransform& po
 bool brute_force_any_within(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
                             const RigidTransform& pose_b, double delta_mm) {
   const auto tb = b_in_a_frame(b, relative_transform(pose_a, pose_b));
-  auto box_of = [](const Triangle& t) {
-    Aabb box;
-    for (const Vec3& p : t) box.extend(p);
-    return box;
-  };
   Aabb all_b;
   std::vector<Aabb> boxes_b;
   for (const Triangle& t : tb) {

@@ -33,6 +33,10 @@ bool brute_force_any_within(const TriangleMesh& a, const RigidTransform& pose_a,
 // rounding - such a pair cannot be nearer. No tree involved.
 double brute_force_distance_pruned(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
                                    const RigidTransform& pose_b);
+// The same set as brute_force_contacts: pairs whose triangles' boxes do not overlap (compared
+// exactly on the same doubles) cannot meet and are skipped.
+PairSet brute_force_contacts_pruned(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
+                                    const RigidTransform& pose_b);
 PairSet brute_force_pairs_within_pruned(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
                                         const RigidTransform& pose_b, double delta_mm);
 

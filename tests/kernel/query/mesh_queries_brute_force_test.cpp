@@ -193,11 +193,11 @@ TEST(MeshQueriesBruteForce, RotationsRoundedToNineDecimalsKeepEveryContactAtFact
   EXPECT_GT(crossing, 100);
 }
 
-// Meshes of thousands of triangles have node slabs (kernel/bvh/node_slabs.h), which distance
-// queries and pairs_within prune with, and leaf pairs skip triangles by their bound against the
-// other leaf. Both meshes with slabs or one, near contact (gaps -1...3 mm) and random poses, at the
+// Meshes of thousands of triangles have node slabs (kernel/bvh/node_slabs.h), which collision,
+// distance and pairs_within queries prune with, and leaf pairs skip triangles by their bound
+// against the other leaf. Both meshes with slabs or one, near contact (gaps -1...3 mm) and random poses, at the
 // origin and at factory offsets: the all-pairs minimum and pair set, no tree involved.
-TEST(MeshQueriesBruteForce, DistanceAndPairsWithinPrunedBySlabsEqualTheAllPairsAnswers) {
+TEST(MeshQueriesBruteForce, ContactsDistanceAndPairsWithinPrunedBySlabsEqualTheAllPairsAnswers) {
   Rng rng(77);
   const auto big_a = MeshBvh::build(testing::share(testing::random_closed_blob(rng, 5, 60.0, 0.6, Vec3::Zero()))).value();
   const auto big_b = MeshBvh::build(testing::share(testing::random_closed_blob(rng, 5, 35.0, 0.6, Vec3::Zero()))).value();
@@ -232,6 +232,12 @@ TEST(MeshQueriesBruteForce, DistanceAndPairsWithinPrunedBySlabsEqualTheAllPairsA
     ASSERT_TRUE(d.found);
     EXPECT_NEAR(d.distance_mm, truth, 1e-12 * std::max(1.0, truth) + 1e-12 * pose_a.translation.norm()) << "round " << round;
     (truth > 0.0 ? apart : touching) += 1;
+
+    CollisionRequest all;
+    all.all_contacts = true;
+    const CollisionResult contacts = collide(first, pose_first, second, pose_second, all).value();
+    EXPECT_EQ(as_set(contacts), testing::brute_force_contacts_pruned(first.mesh(), pose_first, second.mesh(), pose_second))
+        << "round " << round;
 
     const double delta = 1.0;
     const PairSet within = testing::brute_force_pairs_within_pruned(first.mesh(), pose_first, second.mesh(), pose_second, delta);
