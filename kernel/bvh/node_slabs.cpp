@@ -5,40 +5,110 @@
 #include <limits>
 
 namespace gk {
+namespace {
+
+// Nodes of up to this many triangles get the interval of their corners exactly; a larger node
+// gets it from its children's slabs (looser, but such nodes are rarely flat, and measuring every
+// corner at every level cost more than the tree's own build on the largest meshes).
+constexpr int kExactUpTo = 64;
+
+// A stored float direction differs from the double one it was rounded from by less than this
+// (each component within 2^-24 of itself, relative; the direction is unit).
+constexpr double kFloatTurn = 1.0e-7;
+
+struct Interval {
+  double lo = std::numeric_limits<double>::infinity();
+  double hi = -std::numeric_limits<double>::infinity();
+  void add(double lo_value, double hi_value) {
+    lo = std::min(lo, lo_value);
+    hi = std::max(hi, hi_value);
+  }
+};
+
+// The unit direction of a node's slab: its area-weighted normal, or, for a node with none worth
+// the name (closed, strongly curved), the box's thinnest axis: any unit direction is a valid slab.
+Vec3 slab_direction(const Vec3& area, const BvhNode& node) {
+  const double length = area.norm();
+  if (!(length > 0.0) || !std::isfinite(length)) {
+    int thinnest = 0;
+    node.half_extent().minCoeff(&thinnest);
+    return Vec3::Unit(thinnest);
+  }
+  return area / length;
+}
+
+// The interval of u . (x - centre) over the corners of the triangles under node n.
+Interval corners_along(const std::vector<BvhNode>& nodes, int n, const Vec3& u, const Vec3& centre,
+                       const std::function<Triangle(int)>& triangle, std::vector<int>& stack) {
+  Interval interval;
+  stack.clear();
+  stack.push_back(n);
+  while (!stack.empty()) {
+    const int m = stack.back();
+    stack.pop_back();
+    const BvhNode& sub = nodes[static_cast<std::size_t>(m)];
+    if (!sub.is_leaf()) {
+      stack.push_back(sub.second_child());
+      stack.push_back(m + 1);
+      continue;
+    }
+    for (int k = sub.first_triangle(); k <= sub.last_triangle(); ++k) {
+      const Triangle t = triangle(k);
+      for (const Vec3& corner : t) {
+        const double s = u.dot(corner - centre);
+        interval.add(s, s);
+      }
+    }
+  }
+  return interval;
+}
+
+// How far a child node reaches along u either way from its own centre, by its box and its slab
+// together (the same bound the queries use: u = alpha n + w).
+Interval child_reach(const Vec3& u, const NodeSlab& slab, const BvhNode& child) {
+  const Vec3 e = child.half_extent();
+  const Vec3 n = slab.direction();
+  const double alpha = u.dot(n);
+  const double box = (u - alpha * n).cwiseAbs().dot(e);
+  const double s0 = alpha * slab.lo, s1 = alpha * slab.hi;
+  const double box_alone = u.cwiseAbs().dot(e);
+  Interval reach;
+  reach.add(std::max(std::min(s0, s1) - box, -box_alone), std::min(std::max(s0, s1) + box, box_alone));
+  return reach;
+}
+
+}  // namespace
 
 std::vector<NodeSlab> fit_node_slabs(const std::vector<BvhNode>& nodes, const std::function<Triangle(int)>& triangle) {
   const int count = static_cast<int>(nodes.size());
   std::vector<NodeSlab> slabs(nodes.size());
-  // Area-weighted normals bottom-up: in pre-order both children come after their parent.
+  // Area-weighted normals and triangle counts bottom-up: in pre-order both children come after
+  // their parent.
   std::vector<Vec3> area(nodes.size(), Vec3::Zero());
+  std::vector<int> triangles(nodes.size(), 0);
   for (int n = count - 1; n >= 0; --n) {
-    const BvhNode& node = nodes[static_cast<std::size_t>(n)];
+    const auto at = static_cast<std::size_t>(n);
+    const BvhNode& node = nodes[at];
     if (node.is_leaf()) {
       for (int k = node.first_triangle(); k <= node.last_triangle(); ++k) {
         const Triangle t = triangle(k);
-        area[static_cast<std::size_t>(n)] += (t[1] - t[0]).cross(t[2] - t[0]);
+        area[at] += (t[1] - t[0]).cross(t[2] - t[0]);
       }
+      triangles[at] = node.count;
     } else {
-      area[static_cast<std::size_t>(n)] = area[static_cast<std::size_t>(n + 1)] + area[static_cast<std::size_t>(node.second_child())];
+      const auto first = static_cast<std::size_t>(n + 1), second = static_cast<std::size_t>(node.second_child());
+      area[at] = area[first] + area[second];
+      triangles[at] = triangles[first] + triangles[second];
     }
   }
   std::vector<int> stack;
   stack.reserve(2 * kMaxBvhDepth + 4);
-  for (int n = 0; n < count; ++n) {
-    const BvhNode& node = nodes[static_cast<std::size_t>(n)];
-    Vec3 direction = area[static_cast<std::size_t>(n)];
-    const double length = direction.norm();
-    // A closed or strongly curved node has no mean normal worth the name; any unit direction is
-    // still a valid slab (as loose as the box), so take the box's thinnest axis.
-    if (!(length > 0.0) || !std::isfinite(length)) {
-      const Vec3 extent = node.half_extent();
-      int thinnest = 0;
-      extent.minCoeff(&thinnest);
-      direction = Vec3::Unit(thinnest);
-    } else {
-      direction /= length;
-    }
-    NodeSlab& slab = slabs[static_cast<std::size_t>(n)];
+  // Children before parents: a large node's interval is made of its children's slabs.
+  for (int n = count - 1; n >= 0; --n) {
+    const auto at = static_cast<std::size_t>(n);
+    const BvhNode& node = nodes[at];
+    Vec3 direction = slab_direction(area[at], node);
+    NodeSlab& slab = slabs[at];
     for (int c = 0; c < 3; ++c) slab.normal[c] = static_cast<float>(direction[c]);
     if (!(slab.direction().norm() <= kSlabNormalMaxLength)) {  // never seen; kept so the promise holds
       direction = Vec3::UnitX();
@@ -46,41 +116,25 @@ std::vector<NodeSlab> fit_node_slabs(const std::vector<BvhNode>& nodes, const st
       slab.normal[1] = slab.normal[2] = 0.0f;
     }
     // The interval is measured along the double direction, then widened by how far the stored
-    // float direction can turn a corner's projection: each component is within 2^-24 of it
-    // (relative), so the two differ by less than kFloatTurn, times the corner's distance from the
-    // centre. (Measured along the float direction read back from the slab, the -O3 build left
-    // corners 1e-8 mm outside their slab, as if the unrounded direction had been used; the cause
-    // was not found, and this way does not depend on it.)
-    constexpr double kFloatTurn = 1.0e-7;
+    // float direction can turn a point's projection: kFloatTurn times its distance from the
+    // centre, at most the box's half diagonal. (Measured along the float direction read back from
+    // the slab, the -O3 build left corners 1e-8 mm outside their slab, as if the unrounded
+    // direction had been used; the cause was not found, and this way does not depend on it.)
     const Vec3 centre = node.center();
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo, reach_sq = 0.0;
-    stack.clear();
-    stack.push_back(n);
-    while (!stack.empty()) {
-      const int m = stack.back();
-      stack.pop_back();
-      const BvhNode& sub = nodes[static_cast<std::size_t>(m)];
-      if (!sub.is_leaf()) {
-        stack.push_back(sub.second_child());
-        stack.push_back(m + 1);
-        continue;
-      }
-      for (int k = sub.first_triangle(); k <= sub.last_triangle(); ++k) {
-        const Triangle t = triangle(k);
-        for (const Vec3& corner : t) {
-          const Vec3 offset = corner - centre;
-          const double s = direction.dot(offset);
-          lo = std::min(lo, s);
-          hi = std::max(hi, s);
-          reach_sq = std::max(reach_sq, offset.squaredNorm());
-        }
+    Interval interval;
+    if (node.is_leaf() || triangles[at] <= kExactUpTo) {
+      interval = corners_along(nodes, n, direction, centre, triangle, stack);
+    } else {
+      for (const int child : {n + 1, node.second_child()}) {
+        const BvhNode& sub = nodes[static_cast<std::size_t>(child)];
+        const double offset = direction.dot(sub.center() - centre);
+        const Interval reach = child_reach(direction, slabs[static_cast<std::size_t>(child)], sub);
+        interval.add(offset + reach.lo, offset + reach.hi);
       }
     }
-    const double turn = kFloatTurn * std::sqrt(reach_sq) * 1.001;
-    lo -= turn;
-    hi += turn;
-    slab.lo = float_at_or_below(lo);
-    slab.hi = float_at_or_above(hi);
+    const double turn = kFloatTurn * node.half_extent().norm() * 1.001;
+    slab.lo = float_at_or_below(interval.lo - turn);
+    slab.hi = float_at_or_above(interval.hi + turn);
   }
   return slabs;
 }

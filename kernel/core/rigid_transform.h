@@ -44,7 +44,11 @@ struct RigidTransform {
   bool is_rigid() const {
     if (!is_finite()) return false;
     if (rotation == Mat3::Identity()) return true;
-    return off_orthonormality() <= tolerances::kRotationOrthonormality && rotation.determinant() > 0.0;
+    return is_rigid_given(off_orthonormality());
+  }
+  // The same, with off_orthonormality() already at hand (finiteness checked by the caller).
+  bool is_rigid_given(double off_orthonormality_value) const {
+    return off_orthonormality_value <= tolerances::kRotationOrthonormality && rotation.determinant() > 0.0;
   }
 };
 
