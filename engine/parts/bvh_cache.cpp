@@ -33,6 +33,7 @@ Result<std::shared_ptr<MeshBvh>> BvhCache::get_or_build(std::shared_ptr<const Tr
       auto loaded = MeshBvh::deserialize(mesh, bytes.str());
       if (loaded.ok()) {
         ++loaded_;
+        (void)loaded.value()->node_slabs();  // fitted with the part, not by its first query
         return loaded;
       }
       ++rejected_;
@@ -41,6 +42,7 @@ Result<std::shared_ptr<MeshBvh>> BvhCache::get_or_build(std::shared_ptr<const Tr
   auto built = MeshBvh::build(mesh);
   if (!built.ok()) return built;
   ++built_;
+  (void)built.value()->node_slabs();  // fitted with the part, not by its first query
   // Whole file, then rename: a reader never sees half of one.
   std::ostringstream tmp_name;
   // Process and thread: ranks of an MPI audit share the cache directory.

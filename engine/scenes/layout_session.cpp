@@ -70,8 +70,11 @@ Result<std::unique_ptr<LayoutSession>> LayoutSession::create(std::vector<AuditOb
   s->obbs_.resize(n);
   s->stamp_.assign(n, 0);
   // One oriented box per distinct mesh (fitted once per mesh, kept with it), placed per object.
+  // The meshes' node slabs are fitted here too, not by the first frame that queries them (a frame
+  // that fitted a 70,000-triangle mesh's took 4 ms more).
   for (std::size_t i = 0; i < n; ++i) {
     const AuditObject& o = s->objects_[i];
+    (void)o.mesh->node_slabs();
     s->obbs_[i] = placed(o.mesh->oriented_box(), o.pose);
     s->boxes_[i] = transformed_box(o.mesh->root_bounds(), o.pose).expanded(0.5 * s->needed_gap_mm_);
   }
