@@ -37,7 +37,11 @@ Daemon::Daemon(const std::string& data_dir, std::vector<std::string> extra_args,
                std::shared_ptr<grpc::ChannelCredentials> credentials, grpc::ChannelArguments channel_args) {
   const std::string port_file = data_dir + "/port";
   std::filesystem::remove(port_file);
-  std::vector<std::string> args = {GATEKEEPERD_PATH, "--data-dir", data_dir, "--port-file", port_file, "--drain-seconds", "1"};
+  std::vector<std::string> args = {GATEKEEPERD_PATH, "--data-dir", data_dir, "--port-file", port_file};
+  if (std::find(extra_args.begin(), extra_args.end(), "--drain-seconds") == extra_args.end()) {
+    args.push_back("--drain-seconds");
+    args.push_back("1");
+  }
   if (std::find(extra_args.begin(), extra_args.end(), "--log-level") == extra_args.end()) {
     args.push_back("--log-level");
     args.push_back("warn");

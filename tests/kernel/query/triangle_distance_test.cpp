@@ -263,6 +263,43 @@ TEST(TriangleDistance, NearlyParallelCrossingEdgesAtKnownDistance) {
   }
 }
 
+// Nearly parallel edges in general position (not axis-aligned as above), long and far from the
+// origin, whose closest points lie inside both: the interior parameters computed each on their
+// own pulled the two points apart across the edges, by 1e-8 mm where the edges are 7e-10 apart
+// (found by an adversarial review). The expected values are the exact minimum of the two
+// triangles, computed by the reviewer in rational arithmetic (GMP) from these same doubles; the
+// tolerance is 1e-15 of the coordinates' magnitude (rounding).
+TEST(TriangleDistance, NearlyParallelEdgesInGeneralPositionAreNotOverestimated) {
+  struct Case {
+    Triangle p, q;
+    double exact, magnitude;
+  };
+  const Vec3 p0(0x1.9506881593523p+9, 0x1.923bde3b0d508p+7, -0x1.64710e0fa48f5p+5);
+  const Vec3 p1(0x1.909f2e47a1caep+9, 0x1.9e92e7147b6e1p+7, -0x1.ada094dd92b84p+5);
+  const Vec3 q0(0x1.91a20765a2d83p+9, 0x1.9bbd909920022p+7, -0x1.9cd2c3f79d14cp+5);
+  const Vec3 q1(0x1.8d4ff1da05fb5p+9, 0x1.a7d901b888ebap+7, -0x1.e4a0dc37c909dp+5);
+  const Case cases[] = {
+      // Edges about 16 mm long at about 800 mm, 2.1e-8 rad apart.
+      {{p0, p1, Vec3(p0.x() + 3, p0.y() - 7, p0.z() + 11)}, {q0, q1, Vec3(q0.x() - 3, q0.y() + 7, q0.z() - 11)},
+       6.874160914216704e-10, 810.0},
+      // Edges about 8.9 m long, 2.2e-8 rad apart.
+      {{Vec3(0x1.d98d0faa5aa49p+3, -0x1.36550a4a33cb5p+6, 0x1.203ba603a7a72p+5),
+        Vec3(-0x1.e7eeb880836b1p+11, 0x1.d902cff3b10c2p+11, 0x1.0b916740a5cd9p+12),
+        Vec3(-0x1.14b9e4ad88505p+13, -0x1.72dd14ee447e9p+12, -0x1.e5eae2b4b26p+12)},
+       {Vec3(-0x1.9f60fab1c0589p+8, 0x1.5a61b25d7ec44p+8, 0x1.f615c9be11053p+8),
+        Vec3(-0x1.c8a1821ebc41p+11, 0x1.ba29527a90332p+11, 0x1.f53941ba8d48fp+11),
+        Vec3(-0x1.870387c9d8425p+12, 0x1.9e4aed087aa9cp+11, 0x1.19763a4741bffp+13)},
+       8.4897269906714854e-08, 9000.0},
+  };
+  for (const Case& c : cases) {
+    const TriangleDistance d = triangle_distance(c.p, c.q);
+    expect_consistent(d, c.p, c.q);
+    EXPECT_NEAR(d.distance, c.exact, 1e-15 * c.magnitude);
+    const TriangleDistance swapped = triangle_distance(c.q, c.p);
+    EXPECT_NEAR(swapped.distance, c.exact, 1e-15 * c.magnitude);
+  }
+}
+
 TEST(TriangleDistance, VertexAboveFaceAndVertexBesideEdge) {
   for (double h : {2.0, 1.0e-3, 1.0e-7}) {
     // q's lowest point is its vertex above p's interior.
