@@ -12,10 +12,6 @@ namespace {
 // corner at every level cost more than the tree's own build on the largest meshes).
 constexpr int kExactUpTo = 64;
 
-// A stored float direction differs from the double one it was rounded from by less than this
-// (each component within 2^-24 of itself, relative; the direction is unit).
-constexpr double kFloatTurn = 1.0e-7;
-
 struct Interval {
   double lo = std::numeric_limits<double>::infinity();
   double hi = -std::numeric_limits<double>::infinity();
@@ -116,7 +112,7 @@ std::vector<NodeSlab> fit_node_slabs(const std::vector<BvhNode>& nodes, const st
       slab.normal[1] = slab.normal[2] = 0.0f;
     }
     // The interval is measured along the double direction, then widened by how far the stored
-    // float direction can turn a point's projection: kFloatTurn times its distance from the
+    // float direction can turn a point's projection: kSlabNormalTurn times its distance from the
     // centre, at most the box's half diagonal. (Measured along the float direction read back from
     // the slab, the -O3 build left corners 1e-8 mm outside their slab, as if the unrounded
     // direction had been used; the cause was not found, and this way does not depend on it.)
@@ -132,7 +128,7 @@ std::vector<NodeSlab> fit_node_slabs(const std::vector<BvhNode>& nodes, const st
         interval.add(offset + reach.lo, offset + reach.hi);
       }
     }
-    const double turn = kFloatTurn * node.half_extent().norm() * 1.001;
+    const double turn = tolerances::kSlabNormalTurn * node.half_extent().norm() * 1.001;
     slab.lo = float_at_or_below(interval.lo - turn);
     slab.hi = float_at_or_above(interval.hi + turn);
   }

@@ -7,14 +7,14 @@
 
 #include "kernel/bvh/bvh_node.h"
 #include "kernel/core/geometry_types.h"
+#include "kernel/core/tolerances.h"
 
 #include <functional>
 #include <vector>
 
 namespace gk {
 
-// No stored normal is longer than this: a gap measured along it, divided by this, is a distance.
-inline constexpr double kSlabNormalMaxLength = 1.0 + 1e-6;
+using tolerances::kSlabNormalMaxLength;
 
 struct NodeSlab {
   float normal[3];  // unit to float precision: |normal| <= kSlabNormalMaxLength

@@ -17,6 +17,18 @@ inline constexpr double kBoxSlackRelative = 1.0e-12;
 // when a pair of triangles is classified as touching or crossing. [mm]
 inline constexpr double kPointContactMm = 1.0e-9;
 
+// A node slab's stored float normal: its length is at most this (a gap measured along it is
+// divided by this to be a distance), and it differs from the double direction it was rounded from
+// by less than kSlabNormalTurn (each component within 2^-24 of itself, relative), so a corner's
+// projection moves by at most that times its distance from the node's centre. [1]
+inline constexpr double kSlabNormalMaxLength = 1.0 + 1.0e-6;
+inline constexpr double kSlabNormalTurn = 1.0e-7;
+
+// Two segments whose directions' cross product is at most this fraction of the product of their
+// lengths (squared: the sine of their angle below 1e-3) count as nearly parallel: their common
+// perpendicular's parameters are then measured by projection, not taken from the formula. [1]
+inline constexpr double kNearlyParallelSineSquared = 1.0e-6;
+
 // A pose's rotation must be orthonormal to within this (max |R^T R - I| entry). [1]
 inline constexpr double kRotationOrthonormality = 1.0e-9;
 

@@ -1,6 +1,7 @@
 #include "kernel/query/triangle_distance.h"
 
 #include "kernel/query/triangle_intersection.h"
+#include "kernel/core/tolerances.h"
 
 #include <algorithm>
 #include <cmath>
@@ -94,7 +95,7 @@ void closest_points_on_segments(const Vec3& p0, const Vec3& p1, const Vec3& q0, 
       // Clearly not parallel (sine of the angle above 1e-3): the squared distance is then strictly
       // convex in (s, t), so a minimum inside both segments is the minimum; the endpoints below
       // can only matter where the interior parameters are ill-conditioned.
-      if (nn > 1e-6 * d1.squaredNorm() * d2.squaredNorm()) {
+      if (nn > tolerances::kNearlyParallelSineSquared * d1.squaredNorm() * d2.squaredNorm()) {
         consider(p0 + s * d1, q0 + t * d2);
         return;
       }
