@@ -251,6 +251,38 @@ TEST(MeshQueriesBruteForce, ContactsDistanceAndPairsWithinPrunedBySlabsEqualTheA
   EXPECT_GE(touching, 2);
 }
 
+// A mesh whose own coordinates are near 1e7 mm, posed by a rotation written with 9 decimals
+// (accepted: within kRotationOrthonormality of orthonormal, but not orthonormal): B's triangle
+// pierces A's world triangle by 0.002 mm either way. The queries used to map B into A's frame with
+// the rotation's transpose, which misplaced it by 0.002-0.012 mm here: no contact, apart by 2 um
+// (found by an adversarial review with exact rational posing). The world triangle is placed here
+// with the pose as given (rounding about 1e-9 mm at these coordinates, far below the piercing).
+TEST(MeshQueriesBruteForce, ARotationWrittenWithNineDecimalsOnFactoryCoordinatesKeepsItsContacts) {
+  Mat3 nine_decimals;
+  nine_decimals << 1.0, 0.0, 0.0, 0.0, 0.866025404, -0.5, 0.0, 0.5, 0.866025404;
+  const Vec3 stretch_axis = Vec3(1, 1, 1).normalized();
+  for (double stretch : {0.0, 0.6e-9}) {
+    const Mat3 r = nine_decimals * (Mat3::Identity() + (std::sqrt(1.0 + 3.0 * stretch) - 1.0) * stretch_axis * stretch_axis.transpose());
+    RigidTransform pose_a{r, Vec3::Zero()};
+    ASSERT_TRUE(pose_a.is_rigid()) << "stretch " << stretch;
+    const Vec3 local(7e6, 0.0, 9.9e6);
+    pose_a.translation = -(r * local);  // the part's world place near the origin
+    const Triangle ta{local + Vec3(-10, -10, 0), local + Vec3(10, -10, 0), local + Vec3(0, 10, 0)};
+    const Vec3 centre = (pose_a.apply(ta[0]) + pose_a.apply(ta[1]) + pose_a.apply(ta[2])) / 3.0;
+    const Vec3 normal = (pose_a.apply(ta[1]) - pose_a.apply(ta[0])).cross(pose_a.apply(ta[2]) - pose_a.apply(ta[0])).normalized();
+    const Vec3 across = normal.cross(Vec3::UnitX()).normalized();
+    for (double side : {1.0, -1.0}) {
+      // B pierces A's plane: from 0.002 mm on one side to 5 mm on the other.
+      const Triangle tb{centre - side * 0.002 * normal - across, centre - side * 0.002 * normal + across, centre + side * 5.0 * normal};
+      const auto a = MeshBvh::build(testing::share(TriangleMesh::create({ta[0], ta[1], ta[2]}, {{0, 1, 2}}).value())).value();
+      const auto b = MeshBvh::build(testing::share(TriangleMesh::create({tb[0], tb[1], tb[2]}, {{0, 1, 2}}).value())).value();
+      const CollisionResult hit = collide(*a, pose_a, *b, RigidTransform::identity()).value();
+      EXPECT_TRUE(hit.colliding) << "stretch " << stretch << " side " << side;
+      EXPECT_EQ(distance(*a, pose_a, *b, RigidTransform::identity()).value().distance_mm, 0.0) << "stretch " << stretch;
+    }
+  }
+}
+
 TEST(MeshQueriesBruteForce, BadPosesAndRequestsAreErrorsNamingTheField) {
   Rng rng(5);
   const Scenario s = make_scenario(rng, 0);
