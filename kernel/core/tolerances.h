@@ -29,10 +29,13 @@ inline constexpr double kSlabNormalTurn = 1.0e-7;
 // perpendicular's parameters are then measured by projection, not taken from the formula. [1]
 inline constexpr double kNearlyParallelSineSquared = 1.0e-6;
 
-// A rotation this close to orthonormal (max |R^T R - I| entry) is inverted by its transpose; a
-// farther one (still accepted, below kRotationOrthonormality) by its true inverse, since its
-// transpose would misplace points 1e7 mm out by up to 0.01 mm. [1]
-inline constexpr double kOrthonormalToRounding = 1.0e-15;
+// A rotation this close to orthonormal (max |R^T R - I| entry) is inverted by its transpose: it
+// misplaces a point by at most this fraction of its distance from the origin, the relative slack
+// every box test allows (kBoxSlackRelative), and every rotation built from a normalized quaternion
+// or axis-angle is within it. A farther one (still accepted, below kRotationOrthonormality, e.g.
+// written with 9 decimals) is inverted exactly: its transpose would misplace points 1e7 mm out by
+// up to 0.01 mm. [1]
+inline constexpr double kOrthonormalToRounding = 1.0e-12;
 
 // A pose's rotation must be orthonormal to within this (max |R^T R - I| entry). [1]
 inline constexpr double kRotationOrthonormality = 1.0e-9;
