@@ -59,20 +59,6 @@ Interval corners_along(const std::vector<BvhNode>& nodes, int n, const Vec3& u, 
   return interval;
 }
 
-// How far a child node reaches along u either way from its own centre, by its box and its slab
-// together (the same bound the queries use: u = alpha n + w).
-Interval child_reach(const Vec3& u, const NodeSlab& slab, const BvhNode& child) {
-  const Vec3 e = child.half_extent();
-  const Vec3 n = slab.direction();
-  const double alpha = u.dot(n);
-  const double box = (u - alpha * n).cwiseAbs().dot(e);
-  const double s0 = alpha * slab.lo, s1 = alpha * slab.hi;
-  const double box_alone = u.cwiseAbs().dot(e);
-  Interval reach;
-  reach.add(std::max(std::min(s0, s1) - box, -box_alone), std::min(std::max(s0, s1) + box, box_alone));
-  return reach;
-}
-
 }  // namespace
 
 std::vector<NodeSlab> fit_node_slabs(const std::vector<BvhNode>& nodes, const std::function<Triangle(int)>& triangle) {
@@ -124,7 +110,7 @@ std::vector<NodeSlab> fit_node_slabs(const std::vector<BvhNode>& nodes, const st
       for (const int child : {n + 1, node.second_child()}) {
         const BvhNode& sub = nodes[static_cast<std::size_t>(child)];
         const double offset = direction.dot(sub.center() - centre);
-        const Interval reach = child_reach(direction, slabs[static_cast<std::size_t>(child)], sub);
+        const SlabReach reach = reach_along(direction, slabs[static_cast<std::size_t>(child)], sub.half_extent());
         interval.add(offset + reach.lo, offset + reach.hi);
       }
     }

@@ -235,24 +235,14 @@ class MeshPairFrame {
   }
 
   // How far a node reaches along the unit axis u (in the node's own frame), either way from its
-  // centre, bounded by box and slab together: u = alpha n + w, so u.x spans alpha [lo, hi] plus
-  // |w| . e. Any alpha gives a valid bound; the projection on n makes w (and the box's part) least.
-  struct Span {
-    double lo, hi;
-  };
+  // centre: by box and slab together (reach_along, kernel/bvh/node_slabs.h), or by the box alone.
+  using Span = SlabReach;
   static Span span_of(const Vec3& u, const NodeSlab* slab, const Vec3& e) {
-    if (slab == nullptr) {  // the box alone
-      const double box = u.cwiseAbs().dot(e);
-      return {-box, box};
-    }
-    const Vec3 n = slab->direction();
-    const double alpha = u.dot(n);  // n is unit to float precision: close enough to the projection
-    const double box = (u - alpha * n).cwiseAbs().dot(e);
-    const double s0 = alpha * slab->lo, s1 = alpha * slab->hi;
-    // Both are bounds of the same node: the box alone may be the tighter one.
-    const double box_alone = u.cwiseAbs().dot(e);
-    return {std::max(std::min(s0, s1) - box, -box_alone), std::min(std::max(s0, s1) + box, box_alone)};
+    if (slab != nullptr) return reach_along(u, *slab, e);
+    const double box = u.cwiseAbs().dot(e);
+    return {-box, box};
   }
+
   double triangle_to_node_bound(const Triangle& t, const BvhNode& node, const NodeSlab* slab) const {
     const Vec3 tmin = t[0].cwiseMin(t[1]).cwiseMin(t[2]), tmax = t[0].cwiseMax(t[1]).cwiseMax(t[2]);
     double bound = (tmin - node.upper()).cwiseMax(node.lower() - tmax).cwiseMax(0.0).norm();

@@ -34,52 +34,58 @@ bool boxes_apart_by_more_than(const Aabb& x, const Aabb& y, double gap) {
 
 }  // namespace
 
-double brute_force_distance_pruned(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
-                                   const RigidTransform& pose_b) {
+namespace {
+
+// Calls visit(i, ta, j, tb) for every pair whose triangles' boxes are not apart by more than
+// gap() (asked per pair: a running minimum may shrink it); B's triangles in A's frame.
+template <typename Gap, typename Visit>
+void for_each_pair_not_apart(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
+                             const RigidTransform& pose_b, Gap gap, Visit visit) {
   const auto tb = b_in_a_frame(b, relative_transform(pose_a, pose_b));
   std::vector<Aabb> boxes_b;
   for (const Triangle& t : tb) boxes_b.push_back(box_of(t));
-  double best = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < a.triangle_count(); ++i) {
     const Triangle ta = a.triangle(i);
     const Aabb box_a = box_of(ta);
     for (std::size_t j = 0; j < tb.size(); ++j)
-      if (!boxes_apart_by_more_than(box_a, boxes_b[j], best)) best = std::min(best, triangle_distance(ta, tb[j]).distance);
+      if (!boxes_apart_by_more_than(box_a, boxes_b[j], gap())) visit(i, ta, j, tb[j]);
   }
+}
+
+std::pair<std::uint32_t, std::uint32_t> pair_of(std::size_t i, std::size_t j) {
+  return {static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)};
+}
+
+}  // namespace
+
+double brute_force_distance_pruned(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
+                                   const RigidTransform& pose_b) {
+  double best = std::numeric_limits<double>::infinity();
+  for_each_pair_not_apart(a, pose_a, b, pose_b, [&] { return best; },
+                          [&](std::size_t, const Triangle& ta, std::size_t, const Triangle& tb) {
+                            best = std::min(best, triangle_distance(ta, tb).distance);
+                          });
   return best;
 }
 
 PairSet brute_force_contacts_pruned(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
                                     const RigidTransform& pose_b) {
-  const auto tb = b_in_a_frame(b, relative_transform(pose_a, pose_b));
-  std::vector<Aabb> boxes_b;
-  for (const Triangle& t : tb) boxes_b.push_back(box_of(t));
+  // Boxes apart by anything (gap 0) hold triangles that cannot meet.
   PairSet out;
-  for (std::size_t i = 0; i < a.triangle_count(); ++i) {
-    const Triangle ta = a.triangle(i);
-    const Aabb box_a = box_of(ta);
-    for (std::size_t j = 0; j < tb.size(); ++j) {
-      const Aabb& box_b = boxes_b[j];
-      if (((box_a.min - box_b.max).array() > 0.0).any() || ((box_b.min - box_a.max).array() > 0.0).any()) continue;
-      if (triangles_intersect(ta, tb[j])) out.insert({static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)});
-    }
-  }
+  for_each_pair_not_apart(a, pose_a, b, pose_b, [] { return 0.0; },
+                          [&](std::size_t i, const Triangle& ta, std::size_t j, const Triangle& tb) {
+                            if (triangles_intersect(ta, tb)) out.insert(pair_of(i, j));
+                          });
   return out;
 }
 
 PairSet brute_force_pairs_within_pruned(const TriangleMesh& a, const RigidTransform& pose_a, const TriangleMesh& b,
                                         const RigidTransform& pose_b, double delta_mm) {
-  const auto tb = b_in_a_frame(b, relative_transform(pose_a, pose_b));
-  std::vector<Aabb> boxes_b;
-  for (const Triangle& t : tb) boxes_b.push_back(box_of(t));
   PairSet out;
-  for (std::size_t i = 0; i < a.triangle_count(); ++i) {
-    const Triangle ta = a.triangle(i);
-    const Aabb box_a = box_of(ta);
-    for (std::size_t j = 0; j < tb.size(); ++j)
-      if (!boxes_apart_by_more_than(box_a, boxes_b[j], delta_mm) && triangle_distance(ta, tb[j]).distance <= delta_mm)
-        out.insert({static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)});
-  }
+  for_each_pair_not_apart(a, pose_a, b, pose_b, [delta_mm] { return delta_mm; },
+                          [&](std::size_t i, const Triangle& ta, std::size_t j, const Triangle& tb) {
+                            if (triangle_distance(ta, tb).distance <= delta_mm) out.insert(pair_of(i, j));
+                          });
   return out;
 }
 
