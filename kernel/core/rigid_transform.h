@@ -22,9 +22,19 @@ struct RigidTransform {
   Vec3 apply(const Vec3& p) const { return rotation * p + translation; }
   Vec3 apply_direction(const Vec3& d) const { return rotation * d; }
 
+  // The inverse motion. A rotation within kOrthonormalToRounding of orthonormal (every quaternion-
+  // or axis-angle-built one) is inverted by its transpose; one accepted farther from it (written
+  // with 9 decimals) by its true inverse: its transpose would put a point 1e7 mm from the origin
+  // up to 0.01 mm beside where the pose took it from.
   RigidTransform inverse() const {
-    const Mat3 rt = rotation.transpose();
-    return {rt, -(rt * translation)};
+    if (rotation == Mat3::Identity()) return {rotation, -translation};
+    return inverse_given(off_orthonormality());
+  }
+  // The same, with off_orthonormality() already at hand.
+  RigidTransform inverse_given(double off_orthonormality_value) const {
+    const Mat3 r = off_orthonormality_value <= tolerances::kOrthonormalToRounding ? Mat3(rotation.transpose())
+                                                                                   : Mat3(rotation.inverse());
+    return {r, -(r * translation)};
   }
 
   // (this * other)(x) = this(other(x)).

@@ -178,11 +178,11 @@ class MeshPairFrame {
         // A at the origin unrotated (the usual case): B's pose is the relative one, exactly.
         b_in_a_(pose_a.rotation == Mat3::Identity() && pose_a.translation == Vec3::Zero()
                     ? pose_b
-                    : inverse_of(pose_a, off_orthonormal_a) * pose_b) {
+                    : pose_a.inverse_given(off_orthonormal_a) * pose_b) {
     abs_r_ = abs_with_epsilon(b_in_a_.rotation);
     // With A unrotated (the usual case), the relative rotation is B's, exactly.
     const double off_orthonormal = pose_a.rotation == Mat3::Identity() ? off_orthonormal_b : b_in_a_.off_orthonormality();
-    a_in_b_ = inverse_of(b_in_a_, off_orthonormal);
+    a_in_b_ = b_in_a_.inverse_given(off_orthonormal);
     // Rounding in a box test is relative to the magnitude of the coordinates involved.
     const Aabb ra = a.root_bounds(), rb = b.root_bounds();
     const double scale = std::max({ra.min.cwiseAbs().maxCoeff(), ra.max.cwiseAbs().maxCoeff(),
@@ -193,16 +193,6 @@ class MeshPairFrame {
     // inverse, unit axes): their error is then about |R^T R - I| times the coordinates, which the
     // slack must cover as well, or a box lands beside where its triangles are.
     slack_ = (tolerances::kBoxSlackRelative + 16.0 * off_orthonormal) * scale;
-  }
-
-  // The inverse of a pose: with the transpose for a rotation orthonormal to the last bits, else
-  // with the rotation's true inverse. A rotation accepted within kRotationOrthonormality (written
-  // with 9 decimals) is not orthonormal, and its transpose maps a vertex 1e7 mm from the origin by
-  // up to 0.01 mm beside where the pose puts it: two parts crossing in the world were apart.
-  static RigidTransform inverse_of(const RigidTransform& pose, double off_orthonormal) {
-    if (off_orthonormal <= tolerances::kOrthonormalToRounding) return pose.inverse();
-    const Mat3 inverse = pose.rotation.inverse();
-    return {inverse, -(inverse * pose.translation)};
   }
 
   // The gap along A's slab normal (in A's frame) and along B's (in B's frame), for the meshes that

@@ -70,6 +70,35 @@ TEST(ContactVerdict, ContainedBoxIsACollisionWithoutAnySurfaceContact) {
   EXPECT_EQ(verdict_of(*inner, *outer), Verdict::kCollision);
 }
 
+// A part written at factory coordinates (its own vertices near 1e7 mm) with a smaller part inside
+// it, 0.004 mm from its walls, both placed by one rotation written with 9 decimals (accepted, not
+// orthonormal to the last bits). No surfaces meet, so only the containment test can see the
+// collision; inverting the pose by its transpose put the inner part's probe 0.008 mm off, outside
+// the walls, and the pair was CLEAR.
+TEST(ContactVerdict, APartInsideAnotherAtFactoryCoordinatesUnderANineDecimalRotationIsContained) {
+  Mat3 nine_decimals;
+  nine_decimals << 0.866025404, -0.5, 0.0, 0.5, 0.866025404, 0.0, 0.0, 0.0, 1.0;
+  const Vec3 stretch_axis = Vec3(1, 1, 1).normalized();
+  const Vec3 lo(7e6, 2e6, 9.9e6);
+  const auto outer = box(lo, lo + Vec3(1000, 1000, 1000));
+  const auto inner = box(lo + Vec3(0.004, 0.004, 0.004), lo + Vec3(1000 - 0.004, 1000 - 0.004, 1000 - 0.004));
+  for (double stretch : {0.0, 0.6e-9, -0.6e-9}) {
+    const Mat3 r = nine_decimals * (Mat3::Identity() + (std::sqrt(1.0 + 3.0 * stretch) - 1.0) * stretch_axis * stretch_axis.transpose());
+    const RigidTransform pose{r, -(r * lo)};  // the parts' world place near the origin
+    ASSERT_TRUE(pose.is_rigid()) << "stretch " << stretch;
+    // The inverse brings factory points back to within rounding of where they were.
+    const Vec3 corner = lo + Vec3(1000, 1000, 1000);
+    EXPECT_LT((pose.inverse().apply(pose.apply(corner)) - corner).norm(), 1e-6) << "stretch " << stretch;
+    for (const bool outer_first : {true, false}) {
+      const MeshBvh& a = outer_first ? *outer : *inner;
+      const MeshBvh& b = outer_first ? *inner : *outer;
+      const VerdictResult v = assess(a, pose, b, pose).value();
+      EXPECT_EQ(v.verdict, Verdict::kCollision) << "stretch " << stretch << (outer_first ? ", outer first" : ", inner first");
+      EXPECT_TRUE(v.contained) << "stretch " << stretch;
+    }
+  }
+}
+
 TEST(ContactVerdict, FlushInsideIsACollisionNotATouch) {
   // Shares the top face plane with equal normals: overlapping volume, coplanar faces.
   const auto outer = box(Vec3(0, 0, 0), Vec3(10, 10, 10));
