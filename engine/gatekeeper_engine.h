@@ -7,6 +7,7 @@
 
 #include "engine/audits/audit_jobs.h"
 #include "engine/clearance/clearance_query.h"
+#include "engine/fixtures/part_elements.h"
 #include "engine/machines/machine_registry.h"
 #include "engine/parts/part_registry.h"
 #include "engine/parts/part_store.h"
@@ -82,6 +83,13 @@ class Engine {
   // A drag ended: every pose it logged is synced to the disk.
   Result<bool> end_drag();
   Result<SceneRecord> delete_object(const std::string& scene_id, const std::string& object_id);
+
+  // --- fixture assembly (the session itself is engine/fixtures/assembly_session.h, one per client
+  // stream): an element made of an uploaded part at a pose, its features those declared and, for a
+  // CAD part, its cylinders (engine/fixtures/part_elements.h). Errors name field.element_id,
+  // .part_id, .pose, .features[i].
+  Result<FixtureElement> fixture_element(const std::string& element_id, const std::string& part_id, const StoredPose& pose,
+                                         std::vector<CylinderFeature> declared, const std::string& field);
 
   // --- audits
   Result<std::string> start_audit(const std::string& scene_id, const AuditOptions& asked, const std::string& baseline_job_id = "");

@@ -111,6 +111,7 @@ class GatekeeperService final : public ::gatekeeper::v1::Gatekeeper::CallbackSer
                                            pb::ClashStatusInfo* response) override;
   grpc::ServerUnaryReactor* ListClashStatuses(grpc::CallbackServerContext* ctx, const pb::ListClashStatusesRequest* request,
                                               pb::ListClashStatusesResponse* response) override;
+  grpc::ServerBidiReactor<pb::FixtureRequest, pb::FixtureReply>* AssembleFixture(grpc::CallbackServerContext* ctx) override;
   grpc::ServerUnaryReactor* GetServerInfo(grpc::CallbackServerContext* ctx, const pb::GetServerInfoRequest* request,
                                           pb::ServerInfo* response) override;
 

@@ -133,6 +133,8 @@ pb::InconclusiveReason to_proto(InconclusiveReason r) {
     case InconclusiveReason::kTessellationUnresolved: return pb::TESSELLATION_UNRESOLVED;
     case InconclusiveReason::kBrepUndecided: return pb::BREP_UNDECIDED;
     case InconclusiveReason::kPairFailed: return pb::PAIR_FAILED;
+    case InconclusiveReason::kSweepBudgetExhausted: return pb::SWEEP_BUDGET_EXHAUSTED;
+    case InconclusiveReason::kTooManyContacts: return pb::TOO_MANY_CONTACTS;
   }
   return pb::PAIR_FAILED;
 }
@@ -333,6 +335,8 @@ InconclusiveReason from_proto(pb::InconclusiveReason r) {
     case pb::TESSELLATION_UNRESOLVED: return InconclusiveReason::kTessellationUnresolved;
     case pb::BREP_UNDECIDED: return InconclusiveReason::kBrepUndecided;
     case pb::PAIR_FAILED: return InconclusiveReason::kPairFailed;
+    case pb::SWEEP_BUDGET_EXHAUSTED: return InconclusiveReason::kSweepBudgetExhausted;
+    case pb::TOO_MANY_CONTACTS: return InconclusiveReason::kTooManyContacts;
     default: return InconclusiveReason::kNone;
   }
 }

@@ -97,6 +97,8 @@ const char* to_string(InconclusiveReason r) {
     case InconclusiveReason::kTessellationUnresolved: return "TESSELLATION_UNRESOLVED";
     case InconclusiveReason::kBrepUndecided: return "BREP_UNDECIDED";
     case InconclusiveReason::kPairFailed: return "PAIR_FAILED";
+    case InconclusiveReason::kSweepBudgetExhausted: return "SWEEP_BUDGET_EXHAUSTED";
+    case InconclusiveReason::kTooManyContacts: return "TOO_MANY_CONTACTS";
   }
   return "PAIR_FAILED";
 }

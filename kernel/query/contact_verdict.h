@@ -41,6 +41,11 @@ enum class InconclusiveReason {
   kBrepUndecided,
   // The pair could not be computed at all (for example a failed query in an audit): see the text.
   kPairFailed,
+  // A motion between two poses keeps within the contact distance of the other part for longer than
+  // the check's budget of steps: where it first crosses is not known.
+  kSweepBudgetExhausted,
+  // More triangle pairs within the contact distance than the check may look at one by one.
+  kTooManyContacts,
 };
 const char* to_string(InconclusiveReason r);
 
