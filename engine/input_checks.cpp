@@ -36,6 +36,7 @@ Result<bool> check_label(const std::string& text, const std::string& field) {
 Result<StoredPose> checked_pose(const Vec3& translation, const Vec3& axis, double angle_deg, const std::string& field) {
   if (!translation.allFinite()) return invalid_argument(field + ".translation", "must be finite");
   if (!std::isfinite(angle_deg)) return invalid_argument(field + ".rotation_deg", "must be finite");
+  if (std::abs(angle_deg) > kMaxAngleDeg) return invalid_argument(field + ".rotation_deg", "beyond 1e6 degrees either way");
   if (translation.cwiseAbs().maxCoeff() > tolerances::kMaxCoordinateMm)
     return invalid_argument(field + ".translation", "beyond 1e7 mm from the origin");
   StoredPose pose;

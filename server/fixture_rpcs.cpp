@@ -23,9 +23,11 @@ using engine::CylinderFeature;
 using engine::FixtureElement;
 using engine::Mate;
 
-// One session holds at most this many assembled elements (each a loaded part): a client's fixture
-// is tens to hundreds; beyond this the stream is refused more (RESOURCE_EXHAUSTED in-band).
-constexpr std::size_t kMaxAssembledElements = 10000;
+// One session holds at most this many assembled elements: a fixture has tens to hundreds. The
+// layer model is rebuilt in part on every assembly, and its cost grows steeply with the elements
+// that overlap a layer (3,000 scattered elements took 30 ms each to add); beyond this an
+// assemble is refused (RESOURCE_EXHAUSTED, in-band).
+constexpr std::size_t kMaxAssembledElements = 1000;
 
 std::vector<CylinderFeature> features_from_proto(const google::protobuf::RepeatedPtrField<pb::CylinderFeature>& in) {
   std::vector<CylinderFeature> out;
@@ -197,7 +199,7 @@ class FixtureReactor final : public grpc::ServerBidiReactor<pb::FixtureRequest, 
         if (!pose.ok()) return pose.error();
         const Clock::time_point t0 = Clock::now();
         auto frame = session_->frame(pose.value().transform(), stop, !r.frame().pose_only());
-        if (!frame.ok()) return on_the_wire(frame.error(), "frame", "begin_moving");
+        if (!frame.ok()) return on_the_wire(frame.error(), "frame", "frame");
         frame_to_proto(frame.value(), reply_.mutable_frame());
         reply_.mutable_frame()->set_elapsed_us(us_since(t0));
         return true;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <limits>
 #include <tuple>
 
 namespace gk {
@@ -16,6 +17,9 @@ struct NodePair {
 // Leaves up to this size get their triangles bounded one by one against the other leaf before
 // their pairs are tested (the default leaf holds 4).
 constexpr int kMaxLeafTrianglesBounded = 8;
+// A triangle's bound against a leaf is asked only whether it is above zero: any part of it that is
+// already above this settles it.
+constexpr double kAnyGap = std::numeric_limits<double>::denorm_min();
 
 // Tests the triangles of two overlapping leaves; returns false when the traversal should stop.
 bool test_leaves(const MeshPairFrame& frame, int leaf_a, int leaf_b, const CollisionRequest& request,
@@ -28,10 +32,10 @@ bool test_leaves(const MeshPairFrame& frame, int leaf_a, int leaf_b, const Colli
   const bool bound_a = count_a <= kMaxLeafTrianglesBounded;
   if (bound_a)
     for (int i = 0; i < count_a; ++i)
-      a_apart[static_cast<std::size_t>(i)] = frame.triangle_to_node_b_bound(frame.a_triangle_in_b(first_a + i), leaf_b) > 0.0;
+      a_apart[static_cast<std::size_t>(i)] = frame.triangle_to_node_b_bound(frame.a_triangle_in_b(first_a + i), leaf_b, kAnyGap) > 0.0;
   for (int kb = frame.begin_b(leaf_b); kb <= frame.end_b(leaf_b); ++kb) {
     const Triangle tb = frame.b_triangle_in_a(kb);
-    if (frame.triangle_to_node_a_bound(tb, leaf_a) > 0.0) continue;
+    if (frame.triangle_to_node_a_bound(tb, leaf_a, kAnyGap) > 0.0) continue;
     for (int ka = first_a; ka <= frame.end_a(leaf_a); ++ka) {
       if (bound_a && a_apart[static_cast<std::size_t>(ka - first_a)]) continue;
       ++result.stats.triangle_pairs_tested;

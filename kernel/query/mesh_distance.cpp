@@ -82,10 +82,10 @@ Result<DistanceResult> distance(const MeshBvh& a, const RigidTransform& pose_a, 
       const bool bound_a = count_a <= kMaxLeafTriangles;
       if (bound_a)
         for (int i = 0; i < count_a; ++i)
-          a_bound[static_cast<std::size_t>(i)] = frame.triangle_to_node_b_bound(frame.a_triangle_in_b(first_a + i), p.b);
+          a_bound[static_cast<std::size_t>(i)] = frame.triangle_to_node_b_bound(frame.a_triangle_in_b(first_a + i), p.b, best);
       for (int kb = frame.begin_b(p.b); kb <= frame.end_b(p.b); ++kb) {
         const Triangle tb = frame.b_triangle_in_a(kb);
-        if (frame.triangle_to_node_a_bound(tb, p.a) >= best) continue;
+        if (frame.triangle_to_node_a_bound(tb, p.a, best) >= best) continue;
         for (int ka = first_a; ka <= frame.end_a(p.a); ++ka)
           if (!bound_a || a_bound[static_cast<std::size_t>(ka - first_a)] < best) measure(ka, kb, tb);
       }
@@ -105,8 +105,8 @@ Result<DistanceResult> distance(const MeshBvh& a, const RigidTransform& pose_a, 
       near = {p.a, frame.first_child_b(p.b), 0.0};
       far = {p.a, frame.second_child_b(p.b), 0.0};
     }
-    near.lower_bound = frame.pair_lower_bound(near.a, near.b);
-    far.lower_bound = frame.pair_lower_bound(far.a, far.b);
+    near.lower_bound = frame.pair_lower_bound(near.a, near.b, best);
+    far.lower_bound = frame.pair_lower_bound(far.a, far.b, best);
     result.stats.node_pairs_tested += 2;
     if (far.lower_bound < near.lower_bound) std::swap(near, far);
     if (far.lower_bound < best) {
@@ -152,7 +152,7 @@ Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pos
   while (top > 0 && !result.truncated) {
     const auto [na, nb] = stack[--top];
     if ((result.stats.node_pairs_tested++ & kStopCheckMask) == 0 && stop.stop_requested()) return stopped("the pairs within the gap");
-    if (frame.pair_lower_bound(na, nb) > delta_mm) continue;
+    if (frame.pair_lower_bound(na, nb, std::nextafter(delta_mm, 1e300)) > delta_mm) continue;
     const bool leaf_a = frame.is_leaf_a(na), leaf_b = frame.is_leaf_b(nb);
     if (leaf_a && leaf_b) {
       for (int kb = frame.begin_b(nb); kb <= frame.end_b(nb); ++kb) {

@@ -86,27 +86,35 @@ class MeshPairFrame {
   }
 
   // A lower bound of the distance between anything in node_a and anything in node_b: the largest
-  // of the box-to-box gaps measured along A's axes, along B's axes and along the line of centres.
-  double nodes_lower_bound(int node_a, int node_b) const {
+  // of the box-to-box gaps measured along A's axes, along B's axes and along the line of centres,
+  // and of the gaps along the nodes' slab normals. The cheapest come first: once one of them puts
+  // the pair at least `cutoff` apart (a caller's best distance so far, beyond which it drops the
+  // pair) that is returned without the rest - a bound still, and the pair is dropped all the same.
+  double nodes_lower_bound(int node_a, int node_b, double cutoff = std::numeric_limits<double>::infinity()) const {
     const BvhNode& a = na_[node_a];
     const BvhNode& b = nb_[node_b];
     const Vec3 ea = a.half_extent();
     const Vec3 eb = b.half_extent();
     const Vec3 d = b_in_a_.apply(b.center()) - a.center();
+    const double reach = cutoff + slack_;  // a component at least this far drops the pair
     const Vec3 gap_a = (d.cwiseAbs() - ea - abs_r_ * eb).cwiseMax(0.0);
+    double squared = gap_a.squaredNorm();
+    if (squared >= reach * reach) return std::sqrt(squared) - slack_;
     const Vec3 d_in_b = b_in_a_.rotation.transpose() * d;
     const Vec3 gap_b = (d_in_b.cwiseAbs() - abs_r_.transpose() * ea - eb).cwiseMax(0.0);
+    squared = std::max(squared, gap_b.squaredNorm());
+    double bound = std::sqrt(squared);
+    if (bound >= reach) return bound - slack_;
     // Along the line of centres: |d| minus how far each node reaches towards the other, by box and
     // slab together (tightest at rotations where the boxes' own axes are oblique to each other).
     const double length = d.norm();
-    double along = 0.0;
     if (length > 0.0) {
       const Vec3 towards_b = d / length;
       const Span reach_a = span_of(towards_b, sa_ ? &sa_[node_a] : nullptr, ea);
       const Span reach_b = span_of(d_in_b / length, sb_ ? &sb_[node_b] : nullptr, eb);
-      along = length + reach_b.lo - reach_a.hi;
+      bound = std::max(bound, length + reach_b.lo - reach_a.hi);
+      if (bound >= reach) return bound - slack_;
     }
-    double bound = std::max(std::sqrt(std::max(gap_a.squaredNorm(), gap_b.squaredNorm())), along);
     bound = std::max(bound, slab_gap(node_a, node_b, d));
     return std::max(bound - slack_, 0.0);
   }
@@ -126,9 +134,10 @@ class MeshPairFrame {
 
   // The box bound, tightened when exactly one side is a leaf: the leaf's triangles against the
   // other node's bounding sphere. This keeps a small, dense mesh from being opened in full under
-  // every large triangle whose box comes near it.
-  double pair_lower_bound(int node_a, int node_b) const {
-    const double box = nodes_lower_bound(node_a, node_b);
+  // every large triangle whose box comes near it. `cutoff` as for nodes_lower_bound.
+  double pair_lower_bound(int node_a, int node_b, double cutoff = std::numeric_limits<double>::infinity()) const {
+    const double box = nodes_lower_bound(node_a, node_b, cutoff);
+    if (box >= cutoff) return box;
     const bool leaf_a = is_leaf_a(node_a), leaf_b = is_leaf_b(node_b);
     if (leaf_a == leaf_b) return box;
     double nearest = std::numeric_limits<double>::infinity();
@@ -153,11 +162,12 @@ class MeshPairFrame {
   // in that node: the gap between the triangle's box and the node's, and along the node's slab
   // normal when slabs are in use. Lets a leaf pair skip the triangles that cannot come closer
   // than the best distance found so far.
-  double triangle_to_node_a_bound(const Triangle& t_in_a, int node_a) const {
-    return triangle_to_node_bound(t_in_a, na_[node_a], sa_ ? &sa_[node_a] : nullptr);
+  // `cutoff` as for nodes_lower_bound.
+  double triangle_to_node_a_bound(const Triangle& t_in_a, int node_a, double cutoff = std::numeric_limits<double>::infinity()) const {
+    return triangle_to_node_bound(t_in_a, na_[node_a], sa_ ? &sa_[node_a] : nullptr, cutoff);
   }
-  double triangle_to_node_b_bound(const Triangle& t_in_b, int node_b) const {
-    return triangle_to_node_bound(t_in_b, nb_[node_b], sb_ ? &sb_[node_b] : nullptr);
+  double triangle_to_node_b_bound(const Triangle& t_in_b, int node_b, double cutoff = std::numeric_limits<double>::infinity()) const {
+    return triangle_to_node_bound(t_in_b, nb_[node_b], sb_ ? &sb_[node_b] : nullptr, cutoff);
   }
   Triangle a_triangle_in_b(int ordered_a) const {
     const Triangle t = a_->ordered_triangle(ordered_a);
@@ -233,10 +243,10 @@ class MeshPairFrame {
     return {-box, box};
   }
 
-  double triangle_to_node_bound(const Triangle& t, const BvhNode& node, const NodeSlab* slab) const {
+  double triangle_to_node_bound(const Triangle& t, const BvhNode& node, const NodeSlab* slab, double cutoff) const {
     const Vec3 tmin = t[0].cwiseMin(t[1]).cwiseMin(t[2]), tmax = t[0].cwiseMax(t[1]).cwiseMax(t[2]);
     double bound = (tmin - node.upper()).cwiseMax(node.lower() - tmax).cwiseMax(0.0).norm();
-    if (slab != nullptr) {
+    if (slab != nullptr && bound - slack_ < cutoff) {
       const Vec3 n = slab->direction();
       const Vec3 c = node.center();
       const double s0 = n.dot(t[0] - c), s1 = n.dot(t[1] - c), s2 = n.dot(t[2] - c);
