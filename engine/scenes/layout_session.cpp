@@ -114,6 +114,7 @@ Result<FrameAnswer> LayoutSession::move_to(const RigidTransform& pose, const Sto
   }
   const OrientedBox obb = placed(moving_local_obb_, pose);
   FrameAnswer out;
+  exact_.clear();
   for (std::uint32_t id : gathered_) {
     if (!boxes_[id].overlaps(box)) continue;
     ++out.candidates;
@@ -138,20 +139,65 @@ Result<FrameAnswer> LayoutSession::move_to(const RigidTransform& pose, const Sto
       out.worst = Verdict::kCollision;
       continue;
     }
-    if (stop.stop_requested()) return stopped("the moved object's contacts");
-    ++out.exact_checks;
+    exact_.push_back(id);
+  }
+
+  // The pairs left are decided on their meshes: with several, half of them (by triangles) on the
+  // session's second thread.
+  results_.assign(exact_.size(), std::nullopt);
+  const auto check = [&](std::size_t k) {
+    if (stop.stop_requested()) {
+      results_[k] = stopped("the moved object's contacts");
+      return;
+    }
+    const AuditObject& other = objects_[exact_[k]];
     VerdictOptions options;
     options.max_contacts = kFirstContacts;
-    const double reach = clearance_mm_ + self.surface_deviation_mm + other.surface_deviation_mm;
-    options.distance_upper_bound_mm = reach;
+    options.distance_upper_bound_mm = clearance_mm_ + self.surface_deviation_mm + other.surface_deviation_mm;
     options.stop = &stop;  // one pair of large meshes can take seconds: the deadline reaches into it
-    auto v = assess(*self.mesh, pose, *other.mesh, other.pose, options);
+    if (exact_.size() == 1) {  // the second thread is free: the pair's distance query may use it
+      if (!second_hand_) second_hand_ = std::make_unique<SecondHand>();
+      options.spare = second_hand_.get();
+    }
+    results_[k] = assess(*self.mesh, pose, *other.mesh, other.pose, options);
+  };
+  if (exact_.size() >= 2) {
+    // Greedy by triangle count, the larger first: each pair to the lighter side.
+    std::vector<std::size_t> order(exact_.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    const auto weight = [&](std::size_t k) { return objects_[exact_[k]].mesh->mesh().triangle_count(); };
+    std::sort(order.begin(), order.end(), [&](std::size_t l, std::size_t r) { return weight(l) > weight(r); });
+    std::vector<std::size_t> mine, theirs;
+    std::size_t my_load = 0, their_load = 0;
+    for (std::size_t k : order) {
+      if (my_load <= their_load) {
+        mine.push_back(k);
+        my_load += weight(k);
+      } else {
+        theirs.push_back(k);
+        their_load += weight(k);
+      }
+    }
+    if (!second_hand_) second_hand_ = std::make_unique<SecondHand>();
+    second_hand_->start([&] {
+      for (std::size_t k : theirs) check(k);
+    });
+    for (std::size_t k : mine) check(k);
+    second_hand_->wait();
+  } else {
+    for (std::size_t k = 0; k < exact_.size(); ++k) check(k);
+  }
+  for (std::size_t k = 0; k < exact_.size(); ++k) {
+    const std::uint32_t id = exact_[k];
+    Result<VerdictResult>& v = *results_[k];
     if (!v.ok()) return v.error();  // assess decides over every pair; the cap is on the contacts listed
+    ++out.exact_checks;
     const VerdictResult& r = v.value();
     if (r.first_crossing >= 0)
       crossing_[id] = {r.contacts[r.first_crossing].triangle_a, r.contacts[r.first_crossing].triangle_b};
     else
       crossing_.erase(id);
+    const double reach = clearance_mm_ + self.surface_deviation_mm + objects_[id].surface_deviation_mm;
     if (r.verdict == Verdict::kClear && r.distance_mm >= reach) continue;
     out.contacts.push_back({id, r.verdict, r.distance_mm, r.point_a, r.point_b});
     if (severity(r.verdict) > severity(out.worst)) out.worst = r.verdict;

@@ -9,17 +9,20 @@
 //     best one is cached;
 //  3. for a pair that collided last frame, the triangle pair that crossed then: if it still
 //     crosses (one exact triangle test), the pair is a COLLISION there;
-//  4. the exact verdict and distance (kernel/query/contact_verdict) for the pairs left.
+//  4. the exact verdict and distance (kernel/query/contact_verdict) for the pairs left, split
+//     between the calling thread and the session's second one when there are several.
 #pragma once
 
 #include "kernel/query/contact_verdict.h"
 #include "kernel/mesh/oriented_box.h"
 #include "engine/audits/scene_audit.h"
+#include "engine/scenes/second_hand.h"
 #include "kernel/broadphase/uniform_grid.h"
 #include "kernel/core/stop_token.h"
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
@@ -71,6 +74,10 @@ class LayoutSession {
   std::uint32_t stamp_now_ = 0;
   std::unordered_map<std::uint32_t, Vec3> separating_axis_;  // per static object: last frame's axis
   std::unordered_map<std::uint32_t, std::pair<std::uint32_t, std::uint32_t>> crossing_;  // last frame's crossing triangles
+  // A frame's pairs left for the exact verdict, and their answers (kept to reuse their storage).
+  std::vector<std::uint32_t> exact_;
+  std::vector<std::optional<Result<VerdictResult>>> results_;
+  std::unique_ptr<SecondHand> second_hand_;  // started by the first frame with two exact checks
 };
 
 }  // namespace gk::engine

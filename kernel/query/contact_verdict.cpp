@@ -228,6 +228,7 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
 
   DistanceRequest dreq;
   dreq.stop = options.stop;
+  dreq.spare = options.spare;
   if (options.distance_upper_bound_mm > options.contact_tolerance_mm) dreq.upper_bound_mm = options.distance_upper_bound_mm;
   auto measured = distance(a, pose_a, b, pose_b, dreq);
   if (!measured.ok()) return measured.error();

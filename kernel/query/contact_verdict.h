@@ -62,6 +62,8 @@ struct VerdictOptions {
   double distance_upper_bound_mm = std::numeric_limits<double>::infinity();
   // A caller that gave up (deadline, cancel) ends the queries (kStopped); not owned.
   const StopToken* stop = nullptr;
+  // A second thread the distance query may finish on (DistanceRequest::spare); not owned.
+  SpareThread* spare = nullptr;
 };
 
 struct VerdictResult {

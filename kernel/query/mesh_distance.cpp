@@ -4,7 +4,10 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -21,6 +24,131 @@ struct BoundedPair {
   double lower_bound;
 };
 
+// A search with this many node pairs queued is dealt out to a spare thread, when there is one.
+constexpr std::size_t kSplitFrontier = 64;
+
+const auto farther = [](const BoundedPair& x, const BoundedPair& y) { return x.lower_bound > y.lower_bound; };
+
+// The best distance of two searches sharing one: lowered by either, read by both to prune.
+void lower_shared(std::atomic<double>* shared, double value) {
+  if (shared == nullptr) return;
+  double now = shared->load(std::memory_order_relaxed);
+  while (value < now && !shared->compare_exchange_weak(now, value, std::memory_order_relaxed)) {
+  }
+}
+
+// One thread's best-first search: always expand the pair with the smallest lower bound, so the
+// first leaves reached are the likely nearest and the bound tightens before the rest is looked at.
+struct Search {
+  Search(const MeshPairFrame& frame_, const MeshBvh& a_, const DistanceRequest& request_, std::vector<BoundedPair>& queue_,
+         std::atomic<double>* shared_, double best_)
+      : frame(frame_), a(a_), request(request_), queue(queue_), shared(shared_), best(best_) {}
+
+  const MeshPairFrame& frame;
+  const MeshBvh& a;
+  const DistanceRequest& request;
+  std::vector<BoundedPair>& queue;
+  std::atomic<double>* shared;  // with a second search
+  double best;          // the bound pairs are pruned at: this search's own best, or the other's
+  double own_best = std::numeric_limits<double>::infinity();  // the distance of this search's own witnesses
+  int best_ka = -1, best_kb = -1;
+  Vec3 best_pa = Vec3::Zero(), best_pb = Vec3::Zero();
+  QueryStats stats;
+  bool stopped_early = false;
+  bool stop_asked = false;  // the caller gave up
+
+  void measure(int ka, int kb, const Triangle& tb) {
+    ++stats.triangle_pairs_tested;
+    const TriangleDistance d = triangle_distance(a.ordered_triangle(ka), tb, best);
+    if (!d.bounded_only && d.distance < best) {
+      best = own_best = d.distance;
+      best_ka = ka;
+      best_kb = kb;
+      best_pa = d.on_p;
+      best_pb = d.on_q;
+      lower_shared(shared, best);
+    }
+  }
+
+  // Runs from `p` (have_next) and the queue until done, or until the queue holds `split_at` pairs
+  // (returns false then, with p pushed back on the queue).
+  bool run(BoundedPair p, bool have_next, std::size_t split_at) {
+    std::uint64_t looked_at = 0;
+    while (true) {
+      if (!have_next) {
+        if (queue.empty()) return true;
+        std::pop_heap(queue.begin(), queue.end(), farther);
+        p = queue.back();
+        queue.pop_back();
+      }
+      have_next = false;
+      if ((looked_at++ & kStopCheckMask) == 0 && request.stop && request.stop->stop_requested()) {
+        stop_asked = true;
+        return true;
+      }
+      if (shared) best = std::min(best, shared->load(std::memory_order_relaxed));
+      if (p.lower_bound >= best) return true;  // every pair left is at least this far: done
+      if (queue.size() >= split_at) {
+        queue.push_back(p);
+        std::push_heap(queue.begin(), queue.end(), farther);
+        return false;
+      }
+      const bool leaf_a = frame.is_leaf_a(p.a), leaf_b = frame.is_leaf_b(p.b);
+      if (leaf_a && leaf_b) {
+        // Each triangle's bound against the other leaf first: a triangle that cannot come closer
+        // than the best so far is skipped with all its pairs. (Queueing the pairs that remain by
+        // their bounds measured fewer of them but cost more in the queue: 10-30 % slower.)
+        std::array<double, kMaxLeafTriangles> a_bound{};
+        const int first_a = frame.begin_a(p.a), count_a = frame.end_a(p.a) - first_a + 1;
+        const bool bound_a = count_a <= kMaxLeafTriangles;
+        if (bound_a)
+          for (int i = 0; i < count_a; ++i)
+            a_bound[static_cast<std::size_t>(i)] = frame.triangle_to_node_b_bound(frame.a_triangle_in_b(first_a + i), p.b, best);
+        for (int kb = frame.begin_b(p.b); kb <= frame.end_b(p.b); ++kb) {
+          const Triangle tb = frame.b_triangle_in_a(kb);
+          if (frame.triangle_to_node_a_bound(tb, p.a, best) >= best) continue;
+          for (int ka = first_a; ka <= frame.end_a(p.a); ++ka)
+            if (!bound_a || a_bound[static_cast<std::size_t>(ka - first_a)] < best) measure(ka, kb, tb);
+        }
+        if (best_ka >= 0 && best < request.stop_below_mm) {
+          stopped_early = true;
+          return true;
+        }
+        continue;
+      }
+      // Split the larger node.
+      BoundedPair near, far;
+      const bool split_a = !leaf_a && (leaf_b || frame.size_a(p.a) >= frame.size_b(p.b));
+      if (split_a) {
+        near = {frame.first_child_a(p.a), p.b, 0.0};
+        far = {frame.second_child_a(p.a), p.b, 0.0};
+      } else {
+        near = {p.a, frame.first_child_b(p.b), 0.0};
+        far = {p.a, frame.second_child_b(p.b), 0.0};
+      }
+      near.lower_bound = frame.pair_lower_bound(near.a, near.b, best);
+      far.lower_bound = frame.pair_lower_bound(far.a, far.b, best);
+      stats.node_pairs_tested += 2;
+      if (far.lower_bound < near.lower_bound) std::swap(near, far);
+      if (far.lower_bound < best) {
+        queue.push_back(far);
+        std::push_heap(queue.begin(), queue.end(), farther);
+      }
+      // The nearer child is taken straight on when no queued pair is nearer (the order is still
+      // best-first, without a push and a pop for it).
+      if (near.lower_bound < best) {
+        if (queue.empty() || near.lower_bound <= queue.front().lower_bound) {
+          p = near;
+          have_next = true;
+        } else {
+          queue.push_back(near);
+          std::push_heap(queue.begin(), queue.end(), farther);
+        }
+      }
+    }
+  }
+};
+
 }  // namespace
 
 Result<DistanceResult> distance(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
@@ -33,104 +161,57 @@ Result<DistanceResult> distance(const MeshBvh& a, const RigidTransform& pose_a, 
   MeshPairFrame& frame = made.value();
   frame.use_slabs();
 
-  DistanceResult result;
-  double best = request.upper_bound_mm;
-  int best_ka = -1, best_kb = -1;
-  Vec3 best_pa = Vec3::Zero(), best_pb = Vec3::Zero();
-
-  const auto measure = [&](int ka, int kb, const Triangle& tb) {
-    ++result.stats.triangle_pairs_tested;
-    const TriangleDistance d = triangle_distance(a.ordered_triangle(ka), tb, best);
-    if (!d.bounded_only && d.distance < best) {
-      best = d.distance;
-      best_ka = ka;
-      best_kb = kb;
-      best_pa = d.on_p;
-      best_pb = d.on_q;
-    }
-  };
-
-  // Best-first: always expand the pair with the smallest lower bound, so the first leaves reached
-  // are the likely nearest and the bound tightens before the rest is looked at. The queue is a
-  // per-thread buffer reused across queries.
+  // The queue is a per-thread buffer reused across queries.
   thread_local std::vector<BoundedPair> queue;
   queue.clear();
-  const auto farther = [](const BoundedPair& x, const BoundedPair& y) { return x.lower_bound > y.lower_bound; };
-  // The pair to look at next: taken straight from the last split when its bound is no larger than
-  // the queue's smallest (the order is still best-first, without a push and a pop for it).
-  BoundedPair p{0, 0, frame.nodes_lower_bound(0, 0)};
-  bool have_next = true;
-  std::uint64_t looked_at = 0;
-  ++result.stats.node_pairs_tested;
-  while (true) {
-    if (!have_next) {
-      if (queue.empty()) break;
-      std::pop_heap(queue.begin(), queue.end(), farther);
-      p = queue.back();
-      queue.pop_back();
-    }
-    have_next = false;
-    if ((looked_at++ & kStopCheckMask) == 0 && request.stop && request.stop->stop_requested()) return stopped("the distance query");
-    if (p.lower_bound >= best) break;  // every pair left is at least this far: done
-    const bool leaf_a = frame.is_leaf_a(p.a), leaf_b = frame.is_leaf_b(p.b);
-    if (leaf_a && leaf_b) {
-      // Each triangle's bound against the other leaf first: a triangle that cannot come closer
-      // than the best so far is skipped with all its pairs. (Queueing the pairs that remain by
-      // their bounds measured fewer of them but cost more in the queue: 10-30 % slower.)
-      std::array<double, kMaxLeafTriangles> a_bound{};
-      const int first_a = frame.begin_a(p.a), count_a = frame.end_a(p.a) - first_a + 1;
-      const bool bound_a = count_a <= kMaxLeafTriangles;
-      if (bound_a)
-        for (int i = 0; i < count_a; ++i)
-          a_bound[static_cast<std::size_t>(i)] = frame.triangle_to_node_b_bound(frame.a_triangle_in_b(first_a + i), p.b, best);
-      for (int kb = frame.begin_b(p.b); kb <= frame.end_b(p.b); ++kb) {
-        const Triangle tb = frame.b_triangle_in_a(kb);
-        if (frame.triangle_to_node_a_bound(tb, p.a, best) >= best) continue;
-        for (int ka = first_a; ka <= frame.end_a(p.a); ++ka)
-          if (!bound_a || a_bound[static_cast<std::size_t>(ka - first_a)] < best) measure(ka, kb, tb);
-      }
-      if (best_ka >= 0 && best < request.stop_below_mm) {
-        result.stopped_early = true;
-        break;
-      }
-      continue;
-    }
-    // Split the larger node.
-    BoundedPair near, far;
-    const bool split_a = !leaf_a && (leaf_b || frame.size_a(p.a) >= frame.size_b(p.b));
-    if (split_a) {
-      near = {frame.first_child_a(p.a), p.b, 0.0};
-      far = {frame.second_child_a(p.a), p.b, 0.0};
-    } else {
-      near = {p.a, frame.first_child_b(p.b), 0.0};
-      far = {p.a, frame.second_child_b(p.b), 0.0};
-    }
-    near.lower_bound = frame.pair_lower_bound(near.a, near.b, best);
-    far.lower_bound = frame.pair_lower_bound(far.a, far.b, best);
-    result.stats.node_pairs_tested += 2;
-    if (far.lower_bound < near.lower_bound) std::swap(near, far);
-    if (far.lower_bound < best) {
-      queue.push_back(far);
-      std::push_heap(queue.begin(), queue.end(), farther);
-    }
-    if (near.lower_bound < best) {
-      if (queue.empty() || near.lower_bound <= queue.front().lower_bound) {
-        p = near;
-        have_next = true;
-      } else {
-        queue.push_back(near);
-        std::push_heap(queue.begin(), queue.end(), farther);
-      }
+  Search first(frame, a, request, queue, nullptr, request.upper_bound_mm);
+  first.stats.node_pairs_tested = 1;
+  const bool may_split = request.spare != nullptr && request.stop_below_mm < 0.0;
+  bool done = first.run({0, 0, frame.nodes_lower_bound(0, 0)}, true, may_split ? kSplitFrontier : SIZE_MAX);
+  DistanceResult result;
+  if (!done) {
+    // Deal the queued pairs out by their bounds, alternately, so that each search has its share
+    // of the nearest; both prune with the best either has found.
+    std::sort(queue.begin(), queue.end(), [](const BoundedPair& x, const BoundedPair& y) { return x.lower_bound < y.lower_bound; });
+    std::vector<BoundedPair> mine, theirs;
+    for (std::size_t k = 0; k < queue.size(); ++k) (k % 2 == 0 ? mine : theirs).push_back(queue[k]);
+    std::make_heap(mine.begin(), mine.end(), farther);
+    std::make_heap(theirs.begin(), theirs.end(), farther);
+    queue = std::move(mine);
+    std::atomic<double> shared{first.best};
+    first.shared = &shared;
+    Search second(frame, a, request, theirs, &shared, first.best);
+    request.spare->start([&second] { second.run({0, 0, 0.0}, false, SIZE_MAX); });
+    first.run({0, 0, 0.0}, false, SIZE_MAX);
+    request.spare->wait();
+    if (second.stop_asked) first.stop_asked = true;
+    first.stats.node_pairs_tested += second.stats.node_pairs_tested;
+    first.stats.triangle_pairs_tested += second.stats.triangle_pairs_tested;
+    // Each search's witnesses are at its own best; the nearer (the lower ids on a tie) is the answer.
+    const bool second_better = second.best_ka >= 0 &&
+                               (first.best_ka < 0 || second.own_best < first.own_best ||
+                                (second.own_best == first.own_best &&
+                                 std::make_pair(a.mesh_triangle_index(second.best_ka), b.mesh_triangle_index(second.best_kb)) <
+                                     std::make_pair(a.mesh_triangle_index(first.best_ka), b.mesh_triangle_index(first.best_kb))));
+    first.best = first.own_best;
+    if (second_better) {
+      first.best = second.own_best;
+      first.best_ka = second.best_ka;
+      first.best_kb = second.best_kb;
+      first.best_pa = second.best_pa;
+      first.best_pb = second.best_pb;
     }
   }
-
-  if (best_ka >= 0) {
+  if (first.stop_asked) return stopped("the distance query");
+  result.stats = first.stats;
+  result.stopped_early = first.stopped_early;
+  if (first.best_ka >= 0) {
     result.found = true;
-    result.distance_mm = best;
-    result.triangle_a = a.mesh_triangle_index(best_ka);
-    result.triangle_b = b.mesh_triangle_index(best_kb);
-    result.point_a = frame.to_world(best_pa);
-    result.point_b = frame.to_world(best_pb);
+    result.distance_mm = first.best;
+    result.triangle_a = a.mesh_triangle_index(first.best_ka);
+    result.triangle_b = b.mesh_triangle_index(first.best_kb);
+    result.point_a = frame.to_world(first.best_pa);
+    result.point_b = frame.to_world(first.best_pb);
   }
   return result;
 }

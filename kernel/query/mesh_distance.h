@@ -5,6 +5,7 @@
 #include "kernel/bvh/mesh_bvh.h"
 #include "kernel/query/mesh_pair_frame.h"
 #include "kernel/core/rigid_transform.h"
+#include "kernel/core/spare_thread.h"
 #include "kernel/core/status.h"
 #include "kernel/core/stop_token.h"
 
@@ -22,6 +23,11 @@ struct DistanceRequest {
   double stop_below_mm = -1.0;
   // Asked every few thousand node pairs: a caller that gave up ends the traversal (kStopped).
   const StopToken* stop = nullptr;
+  // A second thread to finish a large search on (not owned; without stop_below_mm only): the
+  // node pairs queued once the search has opened kSplitFrontier of them are dealt out between
+  // the two, which share the best distance found. The minimum is the same; of two witness pairs
+  // at exactly that distance the one with the lower triangle ids is kept.
+  SpareThread* spare = nullptr;
 };
 
 struct DistanceResult {

@@ -3,6 +3,7 @@
 #include "kernel/bvh/mesh_bvh.h"
 #include "kernel/query/mesh_collision.h"
 #include "kernel/query/mesh_distance.h"
+#include "kernel/query/triangle_distance.h"
 #include "tests/support/brute_force.h"
 #include "tests/support/near_contact_poses.h"
 #include "tests/support/random_meshes.h"
@@ -11,6 +12,7 @@
 
 #include <cmath>
 #include <random>
+#include <thread>
 
 namespace gk {
 namespace {
@@ -249,6 +251,56 @@ TEST(MeshQueriesBruteForce, ContactsDistanceAndPairsWithinPrunedBySlabsEqualTheA
   // Both outcomes, or the test proves little.
   EXPECT_GT(apart, 5);
   EXPECT_GE(touching, 2);
+}
+
+// A spare thread for the test: each start runs its job on a new std::thread.
+class TestSpareThread final : public SpareThread {
+ public:
+  void start(std::function<void()> job) override { thread_ = std::thread(std::move(job)); }
+  void wait() override { thread_.join(); }
+  int started = 0;
+
+ private:
+  std::thread thread_;
+};
+
+// A distance query finished on two threads (the frontier dealt out, the best distance shared)
+// gives the same minimum as on one and as the all-pairs oracle, with a witness pair at that
+// distance: near contact and at random poses, unbounded and bounded, at the origin and 1e6 mm out.
+TEST(MeshQueriesBruteForce, ADistanceQueryFinishedOnTwoThreadsEqualsTheAllPairsMinimum) {
+  Rng rng(4321);
+  const auto a = MeshBvh::build(testing::share(testing::random_closed_blob(rng, 5, 60.0, 0.6, Vec3::Zero()))).value();
+  const auto b = MeshBvh::build(testing::share(testing::random_closed_blob(rng, 5, 35.0, 0.6, Vec3::Zero()))).value();
+  const std::vector<RigidTransform> near = testing::near_contact_poses(*a, *b, 17u, 12);
+  int split = 0;
+  for (int round = 0; round < 24; ++round) {
+    const RigidTransform relative = round < 12 ? near[static_cast<std::size_t>(round)] : testing::random_pose(rng, 150.0);
+    RigidTransform pose_a = testing::random_pose(rng, 50.0);
+    if (round % 2 == 1) pose_a.translation += Vec3(1.0e6, -3.3e5, 1.4e5);
+    const RigidTransform pose_b = pose_a * relative;
+    for (const double bound : {std::numeric_limits<double>::infinity(), 20.0}) {
+      DistanceRequest one;
+      one.upper_bound_mm = bound;
+      DistanceRequest two = one;
+      TestSpareThread spare;
+      two.spare = &spare;
+      const DistanceResult d1 = distance(*a, pose_a, *b, pose_b, one).value();
+      const DistanceResult d2 = distance(*a, pose_a, *b, pose_b, two).value();
+      ASSERT_EQ(d1.found, d2.found) << "round " << round;
+      if (!d1.found) continue;
+      EXPECT_EQ(d1.distance_mm, d2.distance_mm) << "round " << round;
+      const double truth = testing::brute_force_distance_pruned(a->mesh(), pose_a, b->mesh(), pose_b);
+      EXPECT_NEAR(d2.distance_mm, truth, 1e-12 * std::max(1.0, truth) + 1e-12 * pose_a.translation.norm()) << "round " << round;
+      // The witnesses lie on the triangles they name, that distance apart.
+      Triangle ta = a->mesh().triangle(d2.triangle_a), tb = b->mesh().triangle(d2.triangle_b);
+      for (Vec3& v : ta) v = pose_a.apply(v);
+      for (Vec3& v : tb) v = pose_b.apply(v);
+      EXPECT_NEAR(triangle_distance(ta, tb).distance, d2.distance_mm, 1e-9) << "round " << round;
+      EXPECT_NEAR((d2.point_a - d2.point_b).norm(), d2.distance_mm, 1e-9) << "round " << round;
+      split += d2.stats.node_pairs_tested != d1.stats.node_pairs_tested ? 1 : 0;
+    }
+  }
+  EXPECT_GT(split, 10) << "most of these queries must have been dealt out to the second thread";
 }
 
 // A mesh whose own coordinates are near 1e7 mm, posed by a rotation written with 9 decimals
