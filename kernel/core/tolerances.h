@@ -86,6 +86,11 @@ inline constexpr double kTouchingSweepStepMm = 0.5;
 // ... and at most this many such poses per element and frame; a longer motion in contact is
 // INCONCLUSIVE for that element (a denial), never assumed clear.
 inline constexpr int kTouchingSweepMaxPoses = 1000;
+// A pose computed between two frames (kernel/query/rigid_sweep: pose_between) places points to
+// within this fraction of their coordinates' magnitude: a crossing found there that a shift this
+// large frees is the interpolation's own rounding (a part tipped over an edge it rests on), not a
+// collision. [relative]
+inline constexpr double kInterpolatedPoseRelative = 1.0e-12;
 
 // A step is clamped when the engaged ABA segments press at least this much of the part's upper
 // face (the sheet under the blankholder). [mm^2]

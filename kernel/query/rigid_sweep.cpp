@@ -9,23 +9,67 @@
 
 namespace gk {
 
-RigidTransform pose_between(const RigidTransform& from, const RigidTransform& to, double s) {
+namespace {
+
+// The screw motion taking `from` to `to`: the turn (unit axis w, angle in [0, pi]) and the parts of
+// the origin's displacement along the axis and across it.
+struct Screw {
+  Vec3 axis = Vec3::UnitZ();
+  double angle = 0.0;
+  Vec3 along = Vec3::Zero(), across = Vec3::Zero();
+};
+
+Screw screw_of(const RigidTransform& from, const RigidTransform& to) {
   const Eigen::AngleAxisd turn(to.rotation * from.rotation.transpose());
+  Screw out;
+  out.angle = turn.angle();
+  const Vec3 d = to.translation - from.translation;
+  if (out.angle > 0.0) out.axis = turn.axis();
+  out.along = out.axis * out.axis.dot(d);
+  out.across = d - out.along;
+  return out;
+}
+
+}  // namespace
+
+RigidTransform pose_between(const RigidTransform& from, const RigidTransform& to, double s) {
+  const Screw w = screw_of(from, to);
   RigidTransform out;
-  out.rotation = Eigen::AngleAxisd(s * turn.angle(), turn.axis()).toRotationMatrix() * from.rotation;
-  out.translation = from.translation + s * (to.translation - from.translation);
+  const double phi = s * w.angle;
+  const Eigen::AngleAxisd part(phi, w.axis);
+  out.rotation = part.toRotationMatrix() * from.rotation;
+  if (w.angle == 0.0) {
+    out.translation = from.translation + s * (to.translation - from.translation);
+    return out;
+  }
+  // The origin turns by phi about the screw axis, which passes through c (across it from the
+  // origin's start) with (I - R(angle)) c = across (relative to the start): its displacement across
+  // the axis is (I - R(phi)) c = (a across + b w x across) / 2, written without cot(angle / 2) so
+  // that small angles lose nothing (a -> 2s, b -> 0).
+  const double half = 0.5 * w.angle, sin_half = std::sin(half), sin_half_phi = std::sin(0.5 * phi);
+  const double a = 2.0 * sin_half_phi * sin_half_phi + std::cos(half) * std::sin(phi) / sin_half;
+  const double b = 2.0 * std::cos(half) * sin_half_phi * sin_half_phi / sin_half - std::sin(phi);
+  out.translation = from.translation + 0.5 * (a * w.across + b * w.axis.cross(w.across)) + s * w.along;
   return out;
 }
 
 MotionBound motion_bound(const MeshBvh& moving, const RigidTransform& from, const RigidTransform& to) {
+  const Screw w = screw_of(from, to);
   MotionBound b;
-  b.travel_mm = (to.translation - from.translation).norm();
-  b.angle_rad = Eigen::AngleAxisd(to.rotation * from.rotation.transpose()).angle();
+  b.angle_rad = w.angle;
   const Aabb box = moving.root_bounds();
   for (int k = 0; k < 8; ++k) {
     const Vec3 corner((k & 1) ? box.max.x() : box.min.x(), (k & 2) ? box.max.y() : box.min.y(), (k & 4) ? box.max.z() : box.min.z());
     b.reach_mm = std::max(b.reach_mm, corner.norm());
   }
+  // The origin's path: an arc of angle theta across the axis whose chord is |across| (its radius
+  // |across| / (2 sin(theta / 2))), and |along| along it.
+  const double chord = w.across.norm(), half = 0.5 * w.angle;
+  const double arc = half > 0.0 ? chord * half / std::sin(half) : chord;
+  b.travel_mm = std::hypot(arc, w.along.norm());
+  // A point's distance from the axis is at most the origin's plus the reach: its arc's sagitta is
+  // at most (radius) (1 - cos(theta / 2)); the origin's radius times that is chord tan(theta / 4) / 2.
+  b.sagitta_mm = 0.5 * chord * std::tan(0.25 * w.angle) + b.reach_mm * (1.0 - std::cos(half));
   return b;
 }
 

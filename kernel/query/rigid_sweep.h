@@ -6,10 +6,13 @@
 // poses alone misses (a hand passing through a 1 mm plate between frames). A motion whose closest
 // approach lies between half the contact distance and the contact distance may be stepped over.
 //
-// The motion between the poses: the rotation turns at a constant rate about the moving mesh's own
-// origin (the shortest way from the first rotation to the second), the translation changes
-// linearly. Its rate, in mm per unit s: |translation change| + angle × the largest distance of a
-// vertex from the mesh's origin.
+// The motion between the poses is the screw motion (Chasles): a constant-rate turn about one fixed
+// axis in space (the shortest way from the first rotation to the second) with a constant-rate
+// slide along it. A part tipped over about an edge it rests on turns about that edge, and that
+// edge stays where it is all along (a turn about the part's own origin with its origin moving
+// straight would dip the edge into what it rests on). Its rate, in mm per unit s: the length of
+// the path of the mesh's origin (a helix arc) + angle × the largest distance of a vertex from the
+// mesh's origin.
 #pragma once
 
 #include "kernel/bvh/mesh_bvh.h"
@@ -23,12 +26,16 @@ namespace gk {
 // The pose at parameter s in [0, 1] of the motion from `from` to `to`.
 RigidTransform pose_between(const RigidTransform& from, const RigidTransform& to, double s);
 
-// What bounds how fast the mesh's points move in that motion: the angle turned [rad], and the
-// largest distance of a vertex from the mesh's origin (that of its box's farthest corner) [mm].
+// What bounds how fast the mesh's points move in that motion: the length of its origin's path
+// [mm], the angle turned [rad], and the largest distance of a vertex from the mesh's origin (that
+// of its box's farthest corner) [mm].
 struct MotionBound {
   double travel_mm = 0.0;
   double angle_rad = 0.0;
   double reach_mm = 0.0;
+  // How far any point's path strays from the straight line between its two places: the sagitta
+  // of its arc about the screw axis. [mm]
+  double sagitta_mm = 0.0;
   // No point moves faster than this, in mm per unit s.
   double rate() const { return travel_mm + angle_rad * reach_mm; }
 };
