@@ -81,16 +81,21 @@ inline constexpr double kIntendedContactMm = 1.0e-2;
 // Fixture assembly between frames: an element the assembling element already touches cannot be
 // swept by conservative advancement (it is met at once), so the motion is checked against it at
 // poses no farther apart than this for any point of the assembling element. An element thinner
-// than this, passed through while sliding in contact with it, could go unseen. [mm]
+// than this, passed through while sliding in contact with it, could go unseen. The poses start a
+// contact distance apart and the gap doubles up to this, so a motion that pushes into what it
+// touches is met within twice the contact distance, however thin that is. [mm]
 inline constexpr double kTouchingSweepStepMm = 0.5;
 // ... and at most this many such poses per element and frame; a longer motion in contact is
 // INCONCLUSIVE for that element (a denial), never assumed clear.
 inline constexpr int kTouchingSweepMaxPoses = 1000;
 // A pose computed between two frames (kernel/query/rigid_sweep: pose_between) places points to
-// within this fraction of their coordinates' magnitude: a crossing found there that a shift this
-// large frees is the interpolation's own rounding (a part tipped over an edge it rests on), not a
-// collision. [relative]
-inline constexpr double kInterpolatedPoseRelative = 1.0e-12;
+// within this fraction of their coordinates' magnitude (64 rounding units of a double): a crossing
+// found there that a shift this large frees is the interpolation's own rounding (a part tipped
+// over an edge it rests on), not a collision. It stays far below half the contact distance for
+// every coordinate the product accepts (about 6e-7 mm at 1e7 mm): 1e-12 forgave 5e-5 mm there, and
+// a part passed through a 0.1 mm plate between frames unseen (found by an adversarial review).
+// [relative]
+inline constexpr double kInterpolatedPoseRelative = 1.5e-14;
 
 // A step is clamped when the engaged ABA segments press at least this much of the part's upper
 // face (the sheet under the blankholder). [mm^2]
