@@ -1,13 +1,16 @@
 // The server's shared structures under concurrent use, in process. ThreadSanitizer cannot look
 // through Debian's gRPC (it is not instrumented: a TSan build of the daemon reports thousands of
-// races inside gRPC's own call machinery), so this suite is what scripts/sanitizers.sh runs under
-// TSan for the server; in the Release suite it checks that every answer is still right.
+// races inside gRPC's own call machinery), so this suite is what scripts/test.sh runs under TSan
+// for the server and a drag session's second thread; in the Release suite it checks that every
+// answer is still right.
 #include "engine/machines/machine_registry.h"
+#include "engine/scenes/layout_session.h"
 #include "engine/parts/part_registry.h"
 #include "engine/parts/part_store.h"
 #include "engine/steps/step_answers.h"
 #include "engine/work_pool.h"
 #include "tests/support/file_text.h"
+#include "tests/support/random_meshes.h"
 
 #include <gtest/gtest.h>
 
@@ -253,6 +256,57 @@ TEST(EngineConcurrency, AnswersFiledUnderTheCurrentStateAreThatStatesWhileItChan
     if (auto hit = shared.cached(q); hit && hit->answer.verdict != truth[k]) ++wrong;
   }
   EXPECT_EQ(wrong, 0);
+}
+
+}  // namespace
+}  // namespace gk::engine
+
+namespace gk::engine {
+namespace {
+
+// A drag session's frames use its second thread (engine/scenes/second_hand.h): with two pairs
+// left for the exact verdict each thread takes one; with one, its distance query is finished on
+// both (kernel/core/spare_thread.h). Every frame's contacts must equal the verdicts assessed one
+// by one on this thread (under ThreadSanitizer in scripts/test.sh's thread stage).
+TEST(EngineConcurrency, AFramesExactChecksOnTwoThreadsEqualThemAssessedAlone) {
+  testing::Rng rng(606);
+  const auto blob = MeshBvh::build(testing::share(testing::random_closed_blob(rng, 5, 60.0, 0.6, Vec3::Zero()))).value();
+  ASSERT_GE(blob->mesh().triangle_count(), 4096u);  // slabs and a frontier large enough to be dealt out
+  std::vector<AuditObject> objects;
+  objects.push_back({"left", "blob", "", blob, RigidTransform::from_translation(Vec3(-140, 0, 0)), 0.0, std::nullopt});
+  objects.push_back({"right", "blob", "", blob, RigidTransform::from_translation(Vec3(140, 0, 0)), 0.0, std::nullopt});
+  objects.push_back({"moving", "blob", "", blob, RigidTransform::from_translation(Vec3(0, 300, 0)), 0.0, std::nullopt});
+  const double clearance = 30.0;
+  auto session = LayoutSession::create(objects, 2, clearance);
+  ASSERT_TRUE(session.ok());
+  int two_pairs = 0, one_pair = 0;
+  for (int f = 0; f < 120; ++f) {
+    // Down between the two, swinging: near both, then near one, then into them.
+    const RigidTransform pose = RigidTransform::from_axis_angle(Vec3(0.2, 0.1, 1.0), 0.01 * f,
+                                                                Vec3(60.0 * std::sin(0.1 * f), 300.0 - 2.5 * f, 0.0));
+    auto frame = session.value()->move_to(pose);
+    ASSERT_TRUE(frame.ok()) << frame.error().to_string();
+    std::map<std::uint32_t, Verdict> got;
+    for (const FrameContact& c : frame.value().contacts) got[c.other] = c.verdict;
+    std::map<std::uint32_t, Verdict> alone;
+    for (std::uint32_t k = 0; k < 2; ++k) {
+      VerdictOptions options;
+      options.distance_upper_bound_mm = clearance;
+      const VerdictResult v = assess(*blob, pose, *blob, objects[k].pose, options).value();
+      if (v.verdict != Verdict::kClear || v.distance_mm < clearance) alone[k] = v.verdict;
+      if (v.verdict == Verdict::kClear && v.distance_mm < clearance) {
+        for (const FrameContact& c : frame.value().contacts)
+          if (c.other == k) {
+            EXPECT_EQ(c.distance_mm, v.distance_mm) << "frame " << f;
+          }
+      }
+    }
+    EXPECT_EQ(got, alone) << "frame " << f;
+    two_pairs += frame.value().exact_checks >= 2 ? 1 : 0;
+    one_pair += frame.value().exact_checks == 1 ? 1 : 0;
+  }
+  EXPECT_GT(two_pairs, 5);
+  EXPECT_GT(one_pair, 5);
 }
 
 }  // namespace
