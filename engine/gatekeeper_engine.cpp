@@ -182,14 +182,15 @@ Result<std::vector<ClashStatusRecord>> Engine::clash_statuses(const std::string&
 }
 
 Result<FixtureElement> Engine::fixture_element(const std::string& element_id, const std::string& part_id, const StoredPose& pose,
-                                               std::vector<CylinderFeature> declared, const std::string& field) {
+                                               std::vector<CylinderFeature> declared, const std::string& field,
+                                               std::vector<SlotFeature> declared_slots) {
   if (auto bad = check_id(element_id, field + ".element_id"); !bad.ok()) return bad.error();
   auto checked = checked_pose(pose.translation, pose.axis, pose.angle_deg, field + ".pose");
   if (!checked.ok()) return checked.error();
   if (auto known = parts_.store().get(part_id); !known.ok()) return Error{known.error().code, field + ".part_id", known.error().message};
   auto loaded = parts_.load(part_id, kPartDeflectionMm);
   if (!loaded.ok()) return Error{loaded.error().code, field + ".part_id", loaded.error().message};
-  return element_from_part(loaded.value(), element_id, checked.value().transform(), std::move(declared), field);
+  return element_from_part(loaded.value(), element_id, checked.value().transform(), std::move(declared), field, std::move(declared_slots));
 }
 
 Result<DisplayMesh> Engine::display_mesh(const std::string& part_id, std::size_t max_triangles) {

@@ -86,10 +86,11 @@ class Engine {
 
   // --- fixture assembly (the session itself is engine/fixtures/assembly_session.h, one per client
   // stream): an element made of an uploaded part at a pose, its features those declared and, for a
-  // CAD part, its cylinders (engine/fixtures/part_elements.h). Errors name field.element_id,
-  // .part_id, .pose, .features[i].
+  // CAD part, its cylinders and slots (engine/fixtures/part_elements.h). Errors name
+  // field.element_id, .part_id, .pose, .features[i], .slots[i].
   Result<FixtureElement> fixture_element(const std::string& element_id, const std::string& part_id, const StoredPose& pose,
-                                         std::vector<CylinderFeature> declared, const std::string& field);
+                                         std::vector<CylinderFeature> declared, const std::string& field,
+                                         std::vector<SlotFeature> declared_slots = {});
 
   // --- audits
   Result<std::string> start_audit(const std::string& scene_id, const AuditOptions& asked, const std::string& baseline_job_id = "");

@@ -46,6 +46,24 @@ std::vector<CylinderFeature> features_from_proto(const google::protobuf::Repeate
   return out;
 }
 
+std::vector<engine::SlotFeature> slots_from_proto(const google::protobuf::RepeatedPtrField<pb::SlotFeature>& in) {
+  std::vector<engine::SlotFeature> out;
+  out.reserve(static_cast<std::size_t>(in.size()));
+  for (const pb::SlotFeature& f : in) {
+    engine::SlotFeature c;
+    c.name = f.name();
+    c.origin = Vec3(f.origin().x_mm(), f.origin().y_mm(), f.origin().z_mm());
+    c.across = Vec3(f.across().x(), f.across().y(), f.across().z());
+    c.along = Vec3(f.along().x(), f.along().y(), f.along().z());
+    c.width_mm = f.width_mm();
+    c.half_length_mm = f.half_length_mm();
+    c.half_depth_mm = f.half_depth_mm();
+    c.triangles.assign(f.triangles().begin(), f.triangles().end());
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
 void element_to_proto(const FixtureElement& e, pb::FixtureElementInfo* out) {
   out->set_element_id(e.id);
   out->set_triangles(e.mesh->mesh().triangle_count());
@@ -59,6 +77,17 @@ void element_to_proto(const FixtureElement& e, pb::FixtureElementInfo* out) {
     p->set_radius_mm(f.radius_mm);
     p->set_half_length_mm(f.half_length_mm);
     p->set_hole(f.hole);
+    p->set_deviation_mm(f.deviation_mm);
+  }
+  for (const engine::SlotFeature& f : e.slots) {
+    pb::SlotFeature* p = out->add_slots();
+    p->set_name(f.name);
+    to_proto(f.origin, p->mutable_origin());
+    if (auto across = Direction::of(f.across)) to_proto(*across, p->mutable_across());
+    if (auto along = Direction::of(f.along)) to_proto(*along, p->mutable_along());
+    p->set_width_mm(f.width_mm);
+    p->set_half_length_mm(f.half_length_mm);
+    p->set_half_depth_mm(f.half_depth_mm);
     p->set_deviation_mm(f.deviation_mm);
   }
 }
@@ -210,7 +239,7 @@ class FixtureReactor final : public grpc::ServerBidiReactor<pb::FixtureRequest, 
 
   Result<FixtureElement> element_of(const pb::FixtureElement& e, const std::string& field) {
     return service_.engine().fixture_element(e.element_id(), e.part_id(), to_stored_pose(e.pose()), features_from_proto(e.features()),
-                                             field);
+                                             field, slots_from_proto(e.slots()));
   }
 
   void end(const grpc::Status& status) {
