@@ -217,3 +217,49 @@ TEST(FixtureE2E, CadElementsAreAssembledMatedAndCheckedBetweenFramesThroughTheDa
 
 }  // namespace
 }  // namespace gk
+
+namespace gk {
+namespace {
+
+// A bolt's shank into a T-slot through the daemon: the plate's slots come back with the element
+// (found on its faces), the shank mated with the narrow slot at y = 50 goes down into it CLEAR
+// against its wall, and the same shank 0.15 mm too large for the fit is a collision; OCCT's common
+// on the whole shapes agrees.
+TEST(FixtureE2E, ABoltShankIsMatedWithATSlotFoundOnTheUploadedPlate) {
+  Daemon daemon(testing::temp_dir("fixture-slot-e2e"));
+  auto stub = daemon.stub();
+  const TopoDS_Shape plate = occt::base_plate(200, 150, 20, {0, 0, 50, 12}, 2, 14.0).value().impl().shape;
+  const std::string plate_id = testing::upload_part_id(*stub, brep_of(plate), "brep");
+  Session s(*stub);
+  ASSERT_FALSE(s.start().has_error());
+  const pb::FixtureReply assembled = s.assemble("plate", plate_id, Vec3::Zero());
+  ASSERT_FALSE(assembled.has_error()) << assembled.error().message();
+  std::string slot;
+  for (const pb::SlotFeature& f : assembled.element().slots())
+    if (std::abs(f.width_mm() - 14.0) < 1e-9 && std::abs(f.origin().y_mm() - 50.0) < 1e-9) slot = f.name();
+  ASSERT_FALSE(slot.empty()) << "the narrow slot at y = 50 is a feature of the plate";
+  for (const double radius : {6.9, 7.0}) {
+    const TopoDS_Shape shank = pin_shape(radius, 25.0);
+    const std::string shank_id = testing::upload_part_id(*stub, brep_of(shank), "brep");
+    const pb::FixtureReply held = s.begin("bolt" + std::to_string(static_cast<int>(radius * 10)), shank_id, Vec3(100, 50.05, 30));
+    ASSERT_FALSE(held.has_error()) << held.error().message();
+    const std::string side = feature(held, false, radius);
+    pb::Mate mate;
+    mate.set_moving_feature(side);
+    mate.set_element_id("plate");
+    mate.set_element_feature(slot);
+    mate.set_clearance_mm(0.2);
+    mate.set_tolerance_mm(0.05);
+    ASSERT_FALSE(s.begin("bolt" + std::to_string(static_cast<int>(radius * 10)), shank_id, Vec3(100, 50.05, 30), {mate}).has_error());
+    const Vec3 down(100, 50.05, -5);
+    const pb::FixtureReply f = s.frame(down);
+    ASSERT_TRUE(f.has_frame()) << f.error().message();
+    const bool shares = shared_volume(shank, down, plate, Vec3::Zero()) > 1e-9;
+    EXPECT_EQ(shares, radius > 6.96) << "radius " << radius;
+    EXPECT_EQ(f.frame().verdict(), radius < 6.96 ? pb::CLEAR : pb::COLLISION) << "radius " << radius;
+  }
+  EXPECT_TRUE(s.finish().ok());
+}
+
+}  // namespace
+}  // namespace gk
