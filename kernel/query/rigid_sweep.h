@@ -11,8 +11,7 @@
 // slide along it. A part tipped over about an edge it rests on turns about that edge, and that
 // edge stays where it is all along (a turn about the part's own origin with its origin moving
 // straight would dip the edge into what it rests on). Its rate, in mm per unit s: the length of
-// the path of the mesh's origin (a helix arc) + angle × the largest distance of a vertex from the
-// mesh's origin.
+// the path of the centre of the mesh's box (a helix arc) + angle × half the box's diagonal.
 #pragma once
 
 #include "kernel/bvh/mesh_bvh.h"
@@ -26,9 +25,9 @@ namespace gk {
 // The pose at parameter s in [0, 1] of the motion from `from` to `to`.
 RigidTransform pose_between(const RigidTransform& from, const RigidTransform& to, double s);
 
-// What bounds how fast the mesh's points move in that motion: the length of its origin's path
-// [mm], the angle turned [rad], and the largest distance of a vertex from the mesh's origin (that
-// of its box's farthest corner) [mm].
+// What bounds how fast the mesh's points move in that motion: the length of the path of its box's
+// centre [mm], the angle turned [rad], and the largest distance of a vertex from that centre (half
+// the box's diagonal) [mm].
 struct MotionBound {
   double travel_mm = 0.0;
   double angle_rad = 0.0;
@@ -48,12 +47,14 @@ struct SweepContact {
   Vec3 point = Vec3::Zero();  // where they meet (found): the moving mesh's nearest point, world
   int steps = 0;          // distance queries made
   QueryStats stats;       // summed over the queries
+  // max_steps queries were made without deciding (a motion grazing the other mesh all along):
+  // the caller must treat that as undecided, never as clear.
+  bool exhausted = false;
 };
 
 // The first parameter where moving (from -> to) is found within contact_mm of fixed (every motion
-// that comes within contact_mm / 2 is, see above). Ends with an
-// error when more than max_steps queries would be needed (a motion grazing the mesh all along):
-// the caller must treat that as undecided, never as clear.
+// that comes within contact_mm / 2 is, see above). More than max_steps queries needed (a motion
+// grazing the mesh all along): `exhausted`, with the queries' counts.
 Result<SweepContact> first_contact_along(const MeshBvh& moving, const RigidTransform& from, const RigidTransform& to,
                                          const MeshBvh& fixed, const RigidTransform& fixed_pose, double contact_mm,
                                          int max_steps = 20000, const StopToken* stop = nullptr);

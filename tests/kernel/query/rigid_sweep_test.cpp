@@ -56,6 +56,33 @@ TEST(RigidSweep, TheScrewMotionEndsAtItsPosesAndItsPointsKeepWithinTheBounds) {
   EXPECT_GT(turned, 150);
 }
 
+// A mesh written at factory coordinates (its vertices 9.9e6 mm from its own origin) turned by
+// 1e-3 rad about its middle and slid 1 mm: its points move about 1 mm, and the rate says so (it
+// was measured from the mesh's origin: 1.7e4 mm, and a clear frame ran out of steps).
+TEST(RigidSweep, AMeshWrittenAtFactoryCoordinatesMovesAtTheRateOfItsOwnSize) {
+  const Vec3 far(9.9e6, 9.9e6, 9.9e6);
+  const auto cube = MeshBvh::build(testing::share(testing::box_mesh(far, far + Vec3(10, 10, 10)))).value();
+  const Vec3 middle = far + Vec3(5, 5, 5);
+  const Mat3 turn = Eigen::AngleAxisd(1e-3, Vec3(0.3, 0.5, 0.8).normalized()).toRotationMatrix();
+  const RigidTransform from = RigidTransform::from_translation(-far);
+  RigidTransform to{turn, Vec3::Zero()};
+  to.translation = (Vec3(5, 5, 5) + Vec3(1, 0, 0)) - turn * middle;  // the middle moved by 1 mm
+  const MotionBound bound = motion_bound(*cube, from, to);
+  EXPECT_LT(bound.rate(), 1.1) << "travel " << bound.travel_mm << ", reach " << bound.reach_mm;
+  // And it is a bound: every corner's path, followed in 2,000 steps, is no longer.
+  for (int k = 0; k < 8; ++k) {
+    const Vec3 p = far + Vec3((k & 1) ? 10 : 0, (k & 2) ? 10 : 0, (k & 4) ? 10 : 0);
+    double length = 0.0;
+    Vec3 last = from.apply(p);
+    for (int i = 1; i <= 2000; ++i) {
+      const Vec3 x = pose_between(from, to, i / 2000.0).apply(p);
+      length += (x - last).norm();
+      last = x;
+    }
+    EXPECT_LE(length, bound.rate() * (1.0 + 1e-9) + 1e-6) << "corner " << k;
+  }
+}
+
 // A part tipped over an edge: the second pose turns the first about a line through a point q of
 // that edge. Every pose between keeps q where it was (a turn about the part's own origin with the
 // origin moving straight would dip it by up to lever x (1 - cos(angle / 2))).
