@@ -43,6 +43,8 @@ struct Element {
   std::shared_ptr<const MeshBvh> mesh;
   RigidTransform pose;
   std::shared_ptr<FclObbModel> fcl;
+  std::vector<engine::CylinderFeature> features = {};
+  std::vector<engine::SlotFeature> slots = {};
 };
 
 struct Scenario {
@@ -50,7 +52,20 @@ struct Scenario {
   std::vector<Element> statics;
   Element moving;
   std::vector<RigidTransform> path;
+  std::vector<engine::Mate> mates = {};  // the moving element's intended fits
 };
+
+// The mesh's triangles whose corners all satisfy `on`.
+template <typename On>
+std::vector<std::uint32_t> triangles_where(const TriangleMesh& mesh, On on) {
+  std::vector<std::uint32_t> out;
+  for (std::uint32_t t = 0; t < mesh.triangle_count(); ++t) {
+    bool all = true;
+    for (const Vec3& p : mesh.triangle(t)) all = all && on(p);
+    if (all) out.push_back(t);
+  }
+  return out;
+}
 
 // Meshed as a CAD system exports for a viewer: the angular deflection decides how many facets a
 // hole gets, and the holes carry most of the triangles (seed 004, Table 1).
@@ -146,9 +161,22 @@ Scenario slot_fixture_with_bolt(int frames) {
   const auto support = meshed(occt::cylinder_element(25, 45, 10), 0.02, 4.5);
   for (int k = 0; k < 3; ++k) s.statics.push_back(element("support" + std::to_string(k), support, Vec3(70 + 120 * k, 200, 0)));
   s.moving = element("bolt", meshed(occt::hex_bolt(19, 8, 12, 40), 0.3, 15.0), Vec3(0, 0, 150));
-  // Down into the first T-slot (slot at y = 50, 14 wide: the 12 mm shank passes), along it, up,
-  // then sideways into block1.
-  s.path = path_through({{Vec3(-50, 50, 150), 0}, {Vec3(60, 50, 60), 0}, {Vec3(60, 50, 5), 0}, {Vec3(200, 50, 5), 0},
+  // The shank is mated with the first T-slot's narrow part (y = 50, 14 wide, z -10.5 to 0): a
+  // 2 mm clearance fit. The shank's side and the slot's walls are found by their coordinates.
+  const TriangleMesh& bolt = s.moving.mesh->mesh();
+  s.moving.features.push_back({"shank", Vec3(0, 0, -18), Vec3::UnitZ(), 6.0, 22.0, false,
+                               triangles_where(bolt, [](const Vec3& p) { return std::abs(std::hypot(p.x(), p.y()) - 6.0) <= 1e-6 && p.z() <= 4.0 + 1e-9; })});
+  const TriangleMesh& base = s.statics[0].mesh->mesh();
+  s.statics[0].slots.push_back({"slot50", Vec3(200, 50, -5.25), Vec3::UnitY(), Vec3::UnitX(), 14.0, 200.0, 5.25,
+                                triangles_where(base, [](const Vec3& p) {
+                                  return (std::abs(p.y() - 43.0) <= 1e-9 || std::abs(p.y() - 57.0) <= 1e-9) && p.z() >= -10.5 - 1e-9;
+                                })});
+  // A fit that lets the shank lean 0.5 mm into a wall (clearance 2, tolerance 3): the hand's
+  // wobble of 0.01 rad tilts it by up to 0.4 mm over its length.
+  s.mates.push_back({"shank", "base", "slot50", {2.0, 3.0}});
+  // Down into the first T-slot 1.05 mm beside its mid-plane (the shank's facets 0.05 mm into the
+  // wall at y = 57: the fit's intended contact), along it, up, then sideways into block1.
+  s.path = path_through({{Vec3(-50, 51.05, 150), 0}, {Vec3(60, 51.05, 60), 0}, {Vec3(60, 51.05, 5), 0}, {Vec3(200, 51.05, 5), 0},
                          {Vec3(200, 50, 60), 30}, {Vec3(200, 120, 60), 30}, {Vec3(200, 120, 35), 30}, {Vec3(250, 140, 150), 0}},
                         frames);
   return s;
@@ -204,11 +232,24 @@ void run(const Scenario& s) {
     frames_meeting += expected[f].empty() ? 0 : 1;
   }
 
+  int intended_frames = 0;  // frames with a contact a declared fit makes intended
   auto session_run = [&](bool sweep_too, Timing& time, engine::AssemblyWork& work, int& wrong, int& colliding, int& between) {
     engine::AssemblySession session(Mat3::Identity());
-    for (const Element& e : s.statics) (void)session.assemble({e.id, e.mesh, e.pose, {}});
+    for (const Element& e : s.statics) {
+      auto added = session.assemble({e.id, e.mesh, e.pose, e.features, nullptr, e.slots});
+      if (!added.ok()) {
+        std::fprintf(stderr, "assemble %s: %s\n", e.id.c_str(), added.error().to_string().c_str());
+        std::exit(1);
+      }
+    }
     for (std::size_t f = 0; f < s.path.size(); ++f) {
-      if (f == 0) (void)session.begin_moving({s.moving.id, s.moving.mesh, s.path[f], {}});
+      if (f == 0) {
+        auto begun = session.begin_moving({s.moving.id, s.moving.mesh, s.path[f], s.moving.features}, s.mates);
+        if (!begun.ok()) {
+          std::fprintf(stderr, "begin_moving: %s\n", begun.error().to_string().c_str());
+          std::exit(1);
+        }
+      }
       const auto t0 = Clock::now();
       auto frame = session.frame(s.path[f], {}, sweep_too);
       time.add(t0);
@@ -224,6 +265,7 @@ void run(const Scenario& s) {
           continue;
         }
         got.insert(c.element_id);
+        if (c.intended && sweep_too) ++intended_frames;
       }
       wrong += got == expected[f] ? 0 : 1;
       colliding += frame.value().verdict == Verdict::kCollision ? 1 : 0;
@@ -296,9 +338,11 @@ void run(const Scenario& s) {
   row("layout session (general)", layout_time, "not counted", "not counted", std::to_string(layout_wrong) + " (" + std::to_string(layout_exact) + " exact checks)");
   row("FCL 0.7 OBB, every element, first contact", fcl_time, count(fcl_bv), count(fcl_leaf),
       std::to_string(fcl_frames_colliding) + " frames colliding (FCL counts touching as colliding)");
-  std::printf("assembly session: %d frames COLLISION; broad phase box tests %llu, tree node tests %llu, exact checks %llu, sweep steps %llu\n",
-              lpm_colliding, static_cast<unsigned long long>(lpm_work.box_tests), static_cast<unsigned long long>(lpm_work.node_tests),
-              static_cast<unsigned long long>(lpm_work.exact_checks), static_cast<unsigned long long>(lpm_work.sweep_steps));
+  std::printf("assembly session: %d frames COLLISION, %d with an intended contact (%zu mates); broad phase box tests %llu, tree node "
+              "tests %llu, exact checks %llu, sweep steps %llu\n",
+              lpm_colliding, intended_frames, s.mates.size(), static_cast<unsigned long long>(lpm_work.box_tests),
+              static_cast<unsigned long long>(lpm_work.node_tests), static_cast<unsigned long long>(lpm_work.exact_checks),
+              static_cast<unsigned long long>(lpm_work.sweep_steps));
 }
 
 }  // namespace
