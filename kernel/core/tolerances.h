@@ -88,6 +88,12 @@ inline constexpr double kTouchingSweepStepMm = 0.5;
 // ... and at most this many such poses per element and frame; a longer motion in contact is
 // INCONCLUSIVE for that element (a denial), never assumed clear.
 inline constexpr int kTouchingSweepMaxPoses = 1000;
+// Fixture features (engine/fixtures/feature_fits.h): their triangles may lie at most this fraction
+// of the radius (a slot: of half its width) from the surface they are declared on - a 10-sided
+// polygon's chords lie 4.9 % inside its circle. Farther, they are not that surface (a stray
+// triangle in a hole's list, a blind hole's floor, would make whatever meets it "intended").
+// [relative]
+inline constexpr double kMaxFeatureDeviationRelative = 0.05;
 // A pose computed between two frames (kernel/query/rigid_sweep: pose_between) places points to
 // within this fraction of their coordinates' magnitude (64 rounding units of a double): a crossing
 // found there that a shift this large frees is the interpolation's own rounding (a part tipped

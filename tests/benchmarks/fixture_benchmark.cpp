@@ -164,8 +164,13 @@ Scenario slot_fixture_with_bolt(int frames) {
   // The shank is mated with the first T-slot's narrow part (y = 50, 14 wide, z -10.5 to 0): a
   // 2 mm clearance fit. The shank's side and the slot's walls are found by their coordinates.
   const TriangleMesh& bolt = s.moving.mesh->mesh();
-  s.moving.features.push_back({"shank", Vec3(0, 0, -18), Vec3::UnitZ(), 6.0, 22.0, false,
-                               triangles_where(bolt, [](const Vec3& p) { return std::abs(std::hypot(p.x(), p.y()) - 6.0) <= 1e-6 && p.z() <= 4.0 + 1e-9; })});
+  // (The side only: the end cap, fanned between rim points, has every corner on the circle too.)
+  std::vector<std::uint32_t> side;
+  for (std::uint32_t t : triangles_where(bolt, [](const Vec3& p) { return std::abs(std::hypot(p.x(), p.y()) - 6.0) <= 1e-6 && p.z() <= 4.0 + 1e-9; })) {
+    const Triangle tri = bolt.triangle(t);
+    if (std::abs((tri[1] - tri[0]).cross(tri[2] - tri[0]).normalized().z()) < 0.5) side.push_back(t);
+  }
+  s.moving.features.push_back({"shank", Vec3(0, 0, -18), Vec3::UnitZ(), 6.0, 22.0, false, side});
   const TriangleMesh& base = s.statics[0].mesh->mesh();
   s.statics[0].slots.push_back({"slot50", Vec3(200, 50, -5.25), Vec3::UnitY(), Vec3::UnitX(), 14.0, 200.0, 5.25,
                                 triangles_where(base, [](const Vec3& p) {
