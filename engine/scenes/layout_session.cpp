@@ -145,6 +145,11 @@ Result<FrameAnswer> LayoutSession::move_to(const RigidTransform& pose, const Sto
   // The pairs left are decided on their meshes: with several, half of them (by triangles) on the
   // session's second thread.
   results_.assign(exact_.size(), std::nullopt);
+  const auto reach_of = [&](std::uint32_t id) { return clearance_mm_ + self.surface_deviation_mm + objects_[id].surface_deviation_mm; };
+  const auto second_hand = [&] {
+    if (!second_hand_) second_hand_ = std::make_unique<SecondHand>();
+    return second_hand_.get();
+  };
   const auto check = [&](std::size_t k) {
     if (stop.stop_requested()) {
       results_[k] = stopped("the moved object's contacts");
@@ -153,12 +158,9 @@ Result<FrameAnswer> LayoutSession::move_to(const RigidTransform& pose, const Sto
     const AuditObject& other = objects_[exact_[k]];
     VerdictOptions options;
     options.max_contacts = kFirstContacts;
-    options.distance_upper_bound_mm = clearance_mm_ + self.surface_deviation_mm + other.surface_deviation_mm;
+    options.distance_upper_bound_mm = reach_of(exact_[k]);
     options.stop = &stop;  // one pair of large meshes can take seconds: the deadline reaches into it
-    if (exact_.size() == 1) {  // the second thread is free: the pair's distance query may use it
-      if (!second_hand_) second_hand_ = std::make_unique<SecondHand>();
-      options.spare = second_hand_.get();
-    }
+    if (exact_.size() == 1) options.spare = second_hand();  // the second thread is free: the pair's distance query may use it
     results_[k] = assess(*self.mesh, pose, *other.mesh, other.pose, options);
   };
   if (exact_.size() >= 2) {
@@ -178,12 +180,12 @@ Result<FrameAnswer> LayoutSession::move_to(const RigidTransform& pose, const Sto
         their_load += weight(k);
       }
     }
-    if (!second_hand_) second_hand_ = std::make_unique<SecondHand>();
-    second_hand_->start([&] {
+    SecondHand* other_thread = second_hand();
+    other_thread->start([&] {
       for (std::size_t k : theirs) check(k);
     });
     for (std::size_t k : mine) check(k);
-    second_hand_->wait();
+    other_thread->wait();
   } else {
     for (std::size_t k = 0; k < exact_.size(); ++k) check(k);
   }
@@ -197,8 +199,7 @@ Result<FrameAnswer> LayoutSession::move_to(const RigidTransform& pose, const Sto
       crossing_[id] = {r.contacts[r.first_crossing].triangle_a, r.contacts[r.first_crossing].triangle_b};
     else
       crossing_.erase(id);
-    const double reach = clearance_mm_ + self.surface_deviation_mm + objects_[id].surface_deviation_mm;
-    if (r.verdict == Verdict::kClear && r.distance_mm >= reach) continue;
+    if (r.verdict == Verdict::kClear && r.distance_mm >= reach_of(id)) continue;
     out.contacts.push_back({id, r.verdict, r.distance_mm, r.point_a, r.point_b});
     if (severity(r.verdict) > severity(out.worst)) out.worst = r.verdict;
   }

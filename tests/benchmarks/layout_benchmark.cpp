@@ -1,7 +1,7 @@
 // A layout frame: one machine dragged among the static objects of a generated factory, at a
 // frame's worth of motion per step (40 mm and 0.2 degrees), through robot cells, conveyors,
 // columns and racks. Prints per-frame latency percentiles and what each level cleared.
-//   build/tests/benchmarks/layout_benchmark [objects] [frames] [clearance_mm] [weave|hug|heavy|mesh FILE WEAVE_MM]
+//   build/tests/benchmarks/layout_benchmark [objects] [frames] [clearance_mm] [weave|hug|heavy|mesh FILE WEAVE_MM [SIZE_MM [SPLITS]]]
 // weave: along a bay row, 3 m either side, turning (through robot cells, conveyors, racks);
 // hug: along the first column line, the machine's box 30 mm from the columns' faces, so every
 // column it passes is a candidate for many frames;
@@ -11,11 +11,15 @@
 // mesh FILE WEAVE_MM: gatekeeper-dragbench's scene in process, for any mesh (both sides heavy):
 // copies of the mesh in rows (two widths apart along x; rows so that a copy midway between two
 // has 30 mm to both boxes), one more dragged 40 mm per frame along the rows midway, swinging
-// WEAVE_MM either side (sin(0.02 f)), unturned.
+// WEAVE_MM either side (sin(0.02 f)), unturned. SIZE_MM: the mesh scaled so that its box's largest
+// side is that long; SPLITS: each triangle split in four at its edges' midpoints that many times
+// (a scan of a few thousand triangles made a heavy part of the same shape).
 #include "engine/scenes/layout_session.h"
 #include "mesh_io/mesh_file_reader.h"
 #include "tests/support/factory_scene.h"
 
+#include <array>
+#include <map>
 #include <cmath>
 
 #include <algorithm>
@@ -51,7 +55,44 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "%s\n", read.error().to_string().c_str());
       return 1;
     }
-    auto bvh = gk::MeshBvh::build(std::make_shared<const gk::TriangleMesh>(std::move(read).value())).value();
+    gk::TriangleMesh mesh = std::move(read).value();
+    if (argc > 7) {
+      const gk::Aabb b0 = mesh.bounds();
+      const double scale = std::atof(argv[7]) / (b0.max - b0.min).maxCoeff();
+      const int splits = argc > 8 ? std::atoi(argv[8]) : 0;
+      std::vector<gk::Vec3> vertices;
+      for (const gk::Vec3& v : mesh.vertices()) vertices.push_back(scale * v);
+      std::vector<std::array<std::uint32_t, 3>> faces(mesh.faces().begin(), mesh.faces().end());
+      for (int k = 0; k < splits; ++k) {
+        std::vector<std::array<std::uint32_t, 3>> finer;
+        std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> midpoint;  // one per edge: the mesh stays closed
+        for (const auto& f : faces) {
+          std::uint32_t m[3];
+          for (int e = 0; e < 3; ++e) {
+            const std::uint32_t u = f[e], w = f[(e + 1) % 3];
+            const auto key = std::minmax(u, w);
+            auto it = midpoint.find(key);
+            if (it == midpoint.end()) {
+              vertices.push_back(0.5 * (vertices[u] + vertices[w]));
+              it = midpoint.emplace(key, static_cast<std::uint32_t>(vertices.size() - 1)).first;
+            }
+            m[e] = it->second;
+          }
+          finer.push_back({f[0], m[0], m[2]});
+          finer.push_back({m[0], f[1], m[1]});
+          finer.push_back({m[2], m[1], f[2]});
+          finer.push_back({m[0], m[1], m[2]});
+        }
+        faces = std::move(finer);
+      }
+      auto rebuilt = gk::TriangleMesh::create(std::move(vertices), std::move(faces));
+      if (!rebuilt.ok()) {
+        std::fprintf(stderr, "%s\n", rebuilt.error().to_string().c_str());
+        return 1;
+      }
+      mesh = std::move(rebuilt).value();
+    }
+    auto bvh = gk::MeshBvh::build(std::make_shared<const gk::TriangleMesh>(std::move(mesh))).value();
     const gk::Aabb b = bvh->root_bounds();
     x_pitch = 2.0 * (b.max.x() - b.min.x());
     row_pitch = 2.0 * (b.max.y() - b.min.y()) + 60.0;
