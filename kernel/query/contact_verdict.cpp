@@ -5,7 +5,9 @@
 #include "kernel/query/triangle_intersection.h"
 #include "kernel/core/units.h"
 
+#include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace gk {
 namespace {
@@ -141,98 +143,122 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
   VerdictResult out;
   const bool oriented = a.mesh().is_closed_oriented() && b.mesh().is_closed_oriented();
 
-  CollisionRequest creq;
-  creq.all_contacts = true;
-  creq.max_contacts = options.max_contacts;
-  creq.stop = options.stop;
-  auto collided = collide(a, pose_a, b, pose_b, creq);
-  if (!collided.ok()) return collided.error();
-
-  // Which listed contacts cross (closed meshes: not a touch from outside), and how many were
-  // decided on zero-area triangles.
-  std::size_t decided_on_degenerate = 0;
-  const RigidTransform b_in_a = relative_transform(pose_a, pose_b);
-  const RigidTransform world_to_a = pose_a.inverse();
-  const auto classify = [&](const CollisionResult& col) {
-    out.first_crossing = -1;
-    out.crossing_pairs = 0;
-    decided_on_degenerate = 0;
-    for (const Contact& c : col.contacts) {
-      if (c.involves_degenerate) {
-        ++decided_on_degenerate;
-        continue;
-      }
-      if (!oriented) {
-        if (out.first_crossing < 0) out.first_crossing = static_cast<int>(&c - col.contacts.data());
-        ++out.crossing_pairs;
-        continue;
-      }
-      const Triangle ta = a.mesh().triangle(c.triangle_a);
-      const Triangle tb_local = b.mesh().triangle(c.triangle_b);
-      const Triangle tb = {b_in_a.apply(tb_local[0]), b_in_a.apply(tb_local[1]), b_in_a.apply(tb_local[2])};
-      Contact local = c;
-      local.segment_start = world_to_a.apply(c.segment_start);
-      local.segment_end = world_to_a.apply(c.segment_end);
-      if (!is_outside_contact(ta, tb, local)) {
-        if (out.first_crossing < 0) out.first_crossing = static_cast<int>(&c - col.contacts.data());
-        ++out.crossing_pairs;
-      }
-    }
-  };
-  classify(collided.value());
-  // One crossing pair among those listed makes the pair a COLLISION whatever the rest are. When
-  // none crosses but the list is cut short, the verdict is decided over every pair (thousands of
-  // coplanar pairs where a finely meshed box rests on a plate; open meshes whose first pairs are
-  // all on zero-area triangles): the cap applies only to what is reported.
-  bool crossings_counted_in_full = !collided.value().truncated;
-  if (collided.value().truncated && out.crossing_pairs == 0) {
-    creq.max_contacts = std::numeric_limits<std::size_t>::max();
-    collided = collide(a, pose_a, b, pose_b, creq);
-    if (!collided.ok()) return collided.error();
-    classify(collided.value());
-    crossings_counted_in_full = true;
-  }
-  CollisionResult& col = collided.value();
-  out.stats = col.stats;
-
-  if (col.colliding) {
-    out.distance_mm = 0.0;
-    out.point_a = out.point_b = col.contacts.front().point;
-    out.contacts = std::move(col.contacts);
-    out.contacts_truncated = col.truncated;
-    if (out.contacts.size() > options.max_contacts) {
-      // Keep the first crossing pair among those reported.
-      if (out.first_crossing >= static_cast<int>(options.max_contacts) && options.max_contacts > 0) {
-        std::swap(out.contacts[options.max_contacts - 1], out.contacts[static_cast<std::size_t>(out.first_crossing)]);
-        out.first_crossing = static_cast<int>(options.max_contacts) - 1;
-      }
-      out.contacts.resize(options.max_contacts);
-      if (out.first_crossing >= static_cast<int>(out.contacts.size())) out.first_crossing = -1;
-      out.contacts_truncated = true;
-    }
-    if (out.crossing_pairs > 0) {
-      out.verdict = Verdict::kCollision;
-      out.reason = oriented ? (crossings_counted_in_full ? "" : "at least ") + std::to_string(out.crossing_pairs) +
-                                  " triangle pairs cross"
-                            : "meshes intersect (open meshes: any contact counts as a collision)";
-    } else if (decided_on_degenerate > 0) {
-      out.verdict = Verdict::kInconclusive;
-      out.inconclusive_reason = InconclusiveReason::kDegenerateTriangles;
-      out.reason = "contact decided on zero-area triangles only";
-    } else {
-      out.verdict = Verdict::kTouching;
-      out.reason = "surfaces touch from outside without crossing";
-    }
-    return out;
-  }
-
+  // The distance query's bound: the caller's, but at least twice the contact tolerance (never
+  // below kContactMm), so that nothing found within it is CLEAR, never TOUCHING.
+  const double touch_margin = std::max(options.contact_tolerance_mm, tolerances::kContactMm);
   DistanceRequest dreq;
   dreq.stop = options.stop;
   dreq.spare = options.spare;
-  if (options.distance_upper_bound_mm > options.contact_tolerance_mm) dreq.upper_bound_mm = options.distance_upper_bound_mm;
-  auto measured = distance(a, pose_a, b, pose_b, dreq);
-  if (!measured.ok()) return measured.error();
-  DistanceResult& d = measured.value();
+  if (std::isfinite(options.distance_upper_bound_mm)) dreq.upper_bound_mm = std::max(options.distance_upper_bound_mm, 2.0 * touch_margin);
+  // With a bound, measured first: nothing within it, or nearest farther than the contact tolerance,
+  // and no pair can cross or touch (the query's rounding is orders below kContactMm at coordinates
+  // up to kMaxCoordinateMm), so the all-contacts search is skipped: near long parallel surfaces it
+  // costs as much as the measure. Surfaces that meet end the measure at once (distance 0).
+  const RigidTransform b_in_a = relative_transform(pose_a, pose_b);
+  std::optional<DistanceResult> measured_first;
+  if (std::isfinite(dreq.upper_bound_mm)) {
+    auto m = distance(a, pose_a, b, pose_b, dreq);
+    if (!m.ok()) return m.error();
+    measured_first = std::move(m).value();
+    out.stats = measured_first->stats;
+  }
+  const bool surfaces_apart = measured_first && (!measured_first->found || measured_first->distance_mm > touch_margin);
+  if (!surfaces_apart) {
+    CollisionRequest creq;
+    creq.all_contacts = true;
+    creq.max_contacts = options.max_contacts;
+    creq.stop = options.stop;
+    auto collided = collide(a, pose_a, b, pose_b, creq);
+    if (!collided.ok()) return collided.error();
+
+    // Which listed contacts cross (closed meshes: not a touch from outside), and how many were
+    // decided on zero-area triangles.
+    std::size_t decided_on_degenerate = 0;
+    const RigidTransform world_to_a = pose_a.inverse();
+    const auto classify = [&](const CollisionResult& col) {
+      out.first_crossing = -1;
+      out.crossing_pairs = 0;
+      decided_on_degenerate = 0;
+      for (const Contact& c : col.contacts) {
+        if (c.involves_degenerate) {
+          ++decided_on_degenerate;
+          continue;
+        }
+        if (!oriented) {
+          if (out.first_crossing < 0) out.first_crossing = static_cast<int>(&c - col.contacts.data());
+          ++out.crossing_pairs;
+          continue;
+        }
+        const Triangle ta = a.mesh().triangle(c.triangle_a);
+        const Triangle tb_local = b.mesh().triangle(c.triangle_b);
+        const Triangle tb = {b_in_a.apply(tb_local[0]), b_in_a.apply(tb_local[1]), b_in_a.apply(tb_local[2])};
+        Contact local = c;
+        local.segment_start = world_to_a.apply(c.segment_start);
+        local.segment_end = world_to_a.apply(c.segment_end);
+        if (!is_outside_contact(ta, tb, local)) {
+          if (out.first_crossing < 0) out.first_crossing = static_cast<int>(&c - col.contacts.data());
+          ++out.crossing_pairs;
+        }
+      }
+    };
+    classify(collided.value());
+    // One crossing pair among those listed makes the pair a COLLISION whatever the rest are. When
+    // none crosses but the list is cut short, the verdict is decided over every pair (thousands of
+    // coplanar pairs where a finely meshed box rests on a plate; open meshes whose first pairs are
+    // all on zero-area triangles): the cap applies only to what is reported.
+    bool crossings_counted_in_full = !collided.value().truncated;
+    if (collided.value().truncated && out.crossing_pairs == 0) {
+      creq.max_contacts = std::numeric_limits<std::size_t>::max();
+      collided = collide(a, pose_a, b, pose_b, creq);
+      if (!collided.ok()) return collided.error();
+      classify(collided.value());
+      crossings_counted_in_full = true;
+    }
+    CollisionResult& col = collided.value();
+    out.stats.node_pairs_tested += col.stats.node_pairs_tested;
+    out.stats.triangle_pairs_tested += col.stats.triangle_pairs_tested;
+
+    if (col.colliding) {
+      out.distance_mm = 0.0;
+      out.point_a = out.point_b = col.contacts.front().point;
+      out.contacts = std::move(col.contacts);
+      out.contacts_truncated = col.truncated;
+      if (out.contacts.size() > options.max_contacts) {
+        // Keep the first crossing pair among those reported.
+        if (out.first_crossing >= static_cast<int>(options.max_contacts) && options.max_contacts > 0) {
+          std::swap(out.contacts[options.max_contacts - 1], out.contacts[static_cast<std::size_t>(out.first_crossing)]);
+          out.first_crossing = static_cast<int>(options.max_contacts) - 1;
+        }
+        out.contacts.resize(options.max_contacts);
+        if (out.first_crossing >= static_cast<int>(out.contacts.size())) out.first_crossing = -1;
+        out.contacts_truncated = true;
+      }
+      if (out.crossing_pairs > 0) {
+        out.verdict = Verdict::kCollision;
+        out.reason = oriented ? (crossings_counted_in_full ? "" : "at least ") + std::to_string(out.crossing_pairs) +
+                                    " triangle pairs cross"
+                              : "meshes intersect (open meshes: any contact counts as a collision)";
+      } else if (decided_on_degenerate > 0) {
+        out.verdict = Verdict::kInconclusive;
+        out.inconclusive_reason = InconclusiveReason::kDegenerateTriangles;
+        out.reason = "contact decided on zero-area triangles only";
+      } else {
+        out.verdict = Verdict::kTouching;
+        out.reason = "surfaces touch from outside without crossing";
+      }
+      return out;
+    }
+  }
+
+  // The nearest points: the first measure's, else measured now.
+  if (!measured_first) {
+    auto m = distance(a, pose_a, b, pose_b, dreq);
+    if (!m.ok()) return m.error();
+    out.stats.node_pairs_tested += m.value().stats.node_pairs_tested;
+    out.stats.triangle_pairs_tested += m.value().stats.triangle_pairs_tested;
+    measured_first = std::move(m).value();
+  }
+  DistanceResult& d = *measured_first;
   if (!d.found && std::isfinite(dreq.upper_bound_mm)) {
     d.distance_mm = dreq.upper_bound_mm;
     out.distance_is_lower_bound = true;
@@ -240,8 +266,6 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
   out.distance_mm = d.distance_mm;
   out.point_a = d.point_a;
   out.point_b = d.point_b;
-  out.stats.node_pairs_tested += d.stats.node_pairs_tested;
-  out.stats.triangle_pairs_tested += d.stats.triangle_pairs_tested;
 
   // Disjoint surfaces: a body may still lie wholly inside a closed mesh. One point of every
   // connected body of each mesh is tested against the other when that one is closed, whether or

@@ -57,8 +57,8 @@ struct VerdictOptions {
   double contact_tolerance_mm = tolerances::kContactMm;
   std::size_t max_contacts = 10000;  // contacts reported at most
   // Distances at or beyond this do not matter to the caller (a clearance): the distance query is
-  // pruned there, and a pair at least this far apart comes back CLEAR with distance_mm set to the
-  // bound and distance_is_lower_bound. [mm]
+  // pruned there (at twice the contact tolerance at least), and a pair at least that far apart
+  // comes back CLEAR with distance_mm set to that bound and distance_is_lower_bound. [mm]
   double distance_upper_bound_mm = std::numeric_limits<double>::infinity();
   // A caller that gave up (deadline, cancel) ends the queries (kStopped); not owned.
   const StopToken* stop = nullptr;

@@ -155,6 +155,81 @@ TEST(ContactVerdict, MovingByTheDistanceAlongTheWitnessFlipsTheVerdict) {
   EXPECT_EQ(checked, 60);
 }
 
+// With a distance bound the pair is measured first and the all-contacts search skipped when
+// nothing lies within the contact tolerance: the verdict must be the one found without a bound
+// (collide first, exact predicates), on every side of the tolerance. Blobs moved along their
+// witness to gaps from a crossing of 1e-3 mm to 3x the tolerance, at the origin and at factory
+// coordinates, for bounds below, at and above the tolerance.
+TEST(ContactVerdict, ABoundedVerdictEqualsTheUnboundedOne) {
+  Rng rng(2026);
+  const double tol = tolerances::kContactMm;
+  int touching = 0, clear = 0, colliding = 0;
+  for (int trial = 0; trial < 24; ++trial) {
+    const auto a = MeshBvh::build(testing::share(testing::random_closed_blob(rng, 2, 10.0, 0.15, Vec3::Zero()))).value();
+    const auto b = MeshBvh::build(testing::share(testing::random_closed_blob(rng, 2, 8.0, 0.15, Vec3::Zero()))).value();
+    const double range = trial % 2 ? 9.0e6 : 100.0;
+    const RigidTransform pose_a = testing::random_pose(rng, range);
+    RigidTransform pose_b = testing::random_pose(rng, 1.0);
+    pose_b.translation = pose_a.translation + Vec3::Random().normalized() * 30.0;
+    const auto start = assess(*a, pose_a, *b, pose_b).value();
+    ASSERT_EQ(start.verdict, Verdict::kClear);
+    const Vec3 u = (start.point_b - start.point_a) / start.distance_mm;
+    for (const double gap : {-1e-3, -1e-5, 0.0, 0.5 * tol, tol, 1.5 * tol, 2.0 * tol, 3.0 * tol}) {
+      RigidTransform moved = pose_b;
+      moved.translation -= (start.distance_mm - gap) * u;
+      const VerdictResult unbounded = assess(*a, pose_a, *b, moved).value();
+      for (const double bound : {0.0, tol, 1.5 * tol, 1.0}) {
+        VerdictOptions options;
+        options.distance_upper_bound_mm = bound;
+        const VerdictResult bounded = assess(*a, pose_a, *b, moved, options).value();
+        ASSERT_EQ(bounded.verdict, unbounded.verdict) << "trial " << trial << " gap " << gap << " bound " << bound;
+        EXPECT_EQ(bounded.crossing_pairs, unbounded.crossing_pairs) << "trial " << trial << " gap " << gap;
+        if (bounded.distance_is_lower_bound)
+          EXPECT_LE(bounded.distance_mm, unbounded.distance_mm) << "trial " << trial << " gap " << gap << " bound " << bound;
+        else
+          EXPECT_EQ(bounded.distance_mm, unbounded.distance_mm) << "trial " << trial << " gap " << gap << " bound " << bound;
+      }
+      touching += unbounded.verdict == Verdict::kTouching;
+      clear += unbounded.verdict == Verdict::kClear;
+      colliding += unbounded.verdict == Verdict::kCollision;
+    }
+  }
+  // Every side of the tolerance was reached.
+  EXPECT_GT(touching, 10);
+  EXPECT_GT(clear, 10);
+  EXPECT_GT(colliding, 10);
+}
+
+// The same with the cases whose verdicts are known by construction, under a bound at the
+// tolerance (what the fixture session asks): faces flush, within and beyond the tolerance,
+// sunk in, a box inside another with no surface near, an edge resting on a face.
+TEST(ContactVerdict, KnownCasesUnderABoundAtTheContactTolerance) {
+  VerdictOptions options;
+  options.distance_upper_bound_mm = tolerances::kContactMm;
+  const auto a = box(Vec3(0, 0, 0), Vec3(10, 10, 10));
+  const auto b = box(Vec3(2, 3, 0), Vec3(6, 7, 4));
+  const auto at_height = [&](double z) { return assess(*a, {}, *b, RigidTransform::from_translation(Vec3(0, 0, z)), options).value(); };
+  EXPECT_EQ(at_height(10.0).verdict, Verdict::kTouching);
+  EXPECT_EQ(at_height(10.0 + 0.5 * tolerances::kContactMm).verdict, Verdict::kTouching);
+  EXPECT_EQ(at_height(10.0 + 1.5 * tolerances::kContactMm).verdict, Verdict::kClear);
+  const VerdictResult far = at_height(13.0);
+  EXPECT_EQ(far.verdict, Verdict::kClear);
+  EXPECT_TRUE(far.distance_is_lower_bound);
+  EXPECT_GE(far.distance_mm, tolerances::kContactMm);
+  EXPECT_LE(far.distance_mm, 3.0);
+  EXPECT_EQ(at_height(10.0 - 1e-6).verdict, Verdict::kCollision);
+  EXPECT_EQ(at_height(std::nextafter(10.0, 0.0)).verdict, Verdict::kCollision);
+  const auto inner = box(Vec3(4, 4, 4), Vec3(5, 5, 5));
+  const VerdictResult contained = assess(*a, {}, *inner, {}, options).value();
+  EXPECT_EQ(contained.verdict, Verdict::kCollision);
+  EXPECT_TRUE(contained.contained);
+  const auto floor = box(Vec3(-10, -10, -10), Vec3(10, 10, 0));
+  const auto cube = box(Vec3(-2, -2, -2), Vec3(2, 2, 2));
+  RigidTransform edge_down = RigidTransform::from_axis_angle(Vec3::UnitX(), 0.25 * 3.14159265358979323846);
+  edge_down.translation = Vec3(0, 0, 2.0 * std::sqrt(2.0));
+  EXPECT_EQ(assess(*floor, {}, *cube, edge_down, options).value().verdict, Verdict::kTouching);
+}
+
 TEST(PointContainment, RayParityAgreesWithTheWindingNumber) {
   // Oracle: the winding number (O(n), no ray). Random points around rough blobs, and lattice
   // points on a box's faces, edges and corners, where rays graze edges and must be retried.
