@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 #include <string>
 
 namespace gk {
@@ -42,23 +43,53 @@ Result<TriangleMesh> TriangleMesh::create(std::vector<Vec3> vertices, std::vecto
   // Zero area: repeated corner index, or exactly collinear corners.
   // The kept triangles' degeneracy is known from this test (the same one
   // compute_bounds_and_degeneracy makes): no second pass of exact predicates.
+  std::vector<std::uint8_t> zero_area(faces.size(), 0);
+  for (std::size_t t = 0; t < faces.size(); ++t) {
+    const Face& f = faces[t];
+    zero_area[t] = f[0] == f[1] || f[1] == f[2] || f[0] == f[2] ||
+                   exact::collinear(mesh.vertices_[f[0]], mesh.vertices_[f[1]], mesh.vertices_[f[2]]);
+  }
+  // Only a zero-area triangle whose edges are all edges of triangles with area is dropped (a
+  // sliver along a seam: its points lie on those edges already). One with an edge of its own (a
+  // needle, a wire) is geometry: kept, and a contact on it is reported as on zero-area triangles.
+  std::set<std::pair<std::uint32_t, std::uint32_t>> area_edges;
+  std::vector<std::uint8_t> area_vertex;
+  if (options.drop_zero_area_triangles) {
+    area_vertex.assign(mesh.vertices_.size(), 0);
+    for (std::size_t t = 0; t < faces.size(); ++t) {
+      if (zero_area[t]) continue;
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t u = faces[t][k], v = faces[t][(k + 1) % 3];
+        area_edges.insert({std::min(u, v), std::max(u, v)});
+        area_vertex[u] = 1;
+      }
+    }
+  }
+  const auto covered = [&](const Face& f) {
+    bool any_edge = false;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t u = f[k], v = f[(k + 1) % 3];
+      if (u == v) continue;
+      any_edge = true;
+      if (!area_edges.count({std::min(u, v), std::max(u, v)})) return false;
+    }
+    return any_edge || area_vertex[f[0]] != 0;  // a point: covered if a triangle with area has it
+  };
   std::vector<Face> kept;
   kept.reserve(faces.size());
   mesh.degenerate_.reserve(faces.size());
   for (std::size_t t = 0; t < faces.size(); ++t) {
     const Face& f = faces[t];
-    const bool zero_area = f[0] == f[1] || f[1] == f[2] || f[0] == f[2] ||
-                           exact::collinear(mesh.vertices_[f[0]], mesh.vertices_[f[1]], mesh.vertices_[f[2]]);
-    if (zero_area) {
+    if (zero_area[t]) {
       mesh.report_.zero_area_triangles.push_back(static_cast<std::uint32_t>(t));
-      if (options.drop_zero_area_triangles) {
+      if (options.drop_zero_area_triangles && covered(f)) {
         ++mesh.report_.dropped_triangles;
         continue;
       }
       ++mesh.degenerate_count_;
     }
     kept.push_back(f);
-    mesh.degenerate_.push_back(zero_area ? 1 : 0);
+    mesh.degenerate_.push_back(zero_area[t]);
   }
   if (kept.empty()) return invalid_argument("triangles", "every triangle has zero area");
   mesh.faces_ = std::move(kept);

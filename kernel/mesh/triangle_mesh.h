@@ -13,7 +13,9 @@
 namespace gk {
 
 struct MeshBuildOptions {
-  bool drop_zero_area_triangles = false;  // otherwise they are kept and reported
+  // Drop the zero-area triangles whose edges are all edges of triangles with area (seam slivers);
+  // otherwise (and those with an edge of their own, needles) they are kept and reported.
+  bool drop_zero_area_triangles = false;
 };
 
 // What validation found that is not an error.

@@ -236,9 +236,21 @@ Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pos
     if (frame.pair_lower_bound(na, nb, std::nextafter(delta_mm, 1e300)) > delta_mm) continue;
     const bool leaf_a = frame.is_leaf_a(na), leaf_b = frame.is_leaf_b(nb);
     if (leaf_a && leaf_b) {
+      // Each triangle's bound against the other leaf first, as in the distance search: two curved
+      // surfaces in line contact (a pin in its hole) have most leaf pairs' boxes overlapping and
+      // few of their triangles near.
+      const double cutoff = std::nextafter(delta_mm, 1e300);
+      std::array<double, kMaxLeafTriangles> a_bound{};
+      const int first_a = frame.begin_a(na), count_a = frame.end_a(na) - first_a + 1;
+      const bool bound_a = count_a <= kMaxLeafTriangles;
+      if (bound_a)
+        for (int i = 0; i < count_a; ++i)
+          a_bound[static_cast<std::size_t>(i)] = frame.triangle_to_node_b_bound(frame.a_triangle_in_b(first_a + i), nb, cutoff);
       for (int kb = frame.begin_b(nb); kb <= frame.end_b(nb); ++kb) {
         const Triangle tb = frame.b_triangle_in_a(kb);
-        for (int ka = frame.begin_a(na); ka <= frame.end_a(na); ++ka) {
+        if (frame.triangle_to_node_a_bound(tb, na, cutoff) > delta_mm) continue;
+        for (int ka = first_a; ka <= frame.end_a(na); ++ka) {
+          if (bound_a && a_bound[static_cast<std::size_t>(ka - first_a)] > delta_mm) continue;
           ++result.stats.triangle_pairs_tested;
           const TriangleDistance d = triangle_distance(a.ordered_triangle(ka), tb, std::nextafter(delta_mm, 1e300));
           if (!d.bounded_only && d.distance <= delta_mm) {

@@ -141,21 +141,26 @@ class MeshPairFrame {
     const bool leaf_a = is_leaf_a(node_a), leaf_b = is_leaf_b(node_b);
     if (leaf_a == leaf_b) return box;
     double nearest = std::numeric_limits<double>::infinity();
-    double radius;
+    double radius, leaf_reach;
     if (leaf_a) {
       const Vec3 c = b_in_a_.apply(nb_[node_b].center());
       radius = nb_[node_b].half_extent().norm();
+      leaf_reach = na_[node_a].half_extent().norm();
       for (int k = begin_a(node_a); k <= end_a(node_a); ++k)
         nearest = std::min(nearest, (closest_point_on_triangle(c, a_->ordered_triangle(k)) - c).norm());
     } else {
       const Vec3 c = a_in_b_.apply(na_[node_a].center());
       radius = na_[node_a].half_extent().norm();
+      leaf_reach = nb_[node_b].half_extent().norm();
       for (int k = begin_b(node_b); k <= end_b(node_b); ++k)
         nearest = std::min(nearest, (closest_point_on_triangle(c, b_->ordered_triangle(k)) - c).norm());
     }
     // A NaN (never expected, but a bound must not prune on one) counts as no bound.
     if (!(nearest == nearest)) return box;
-    return std::max(box, nearest - radius - slack_);
+    // The closest point's own rounding (closest_point_on_triangle: within about 1e-10 of the
+    // triangle's size and the distance, kSliverAspect) is taken off with room to spare.
+    const double rounding = 1e-9 * (nearest + radius + leaf_reach);
+    return std::max(box, nearest - radius - slack_ - rounding);
   }
 
   // A lower bound of the distance between a triangle (given in the node's mesh frame) and anything

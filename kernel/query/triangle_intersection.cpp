@@ -210,6 +210,68 @@ bool second_canonical(const Vec3& p1, const Vec3& q1, const Vec3& r1, const Vec3
   return hit;
 }
 
+// Exactly collinear corners (a zero-area triangle: a needle or a point): every projection to a
+// coordinate plane is collinear too.
+bool collinear(const Triangle& t) {
+  for (int drop = 0; drop < 3; ++drop)
+    if (orient(project(t[0], drop), project(t[1], drop), project(t[2], drop)) != 0) return false;
+  return true;
+}
+
+// Does segment [a, b] meet triangle t (non-degenerate), boundaries included? Exact. `at` is a
+// point of the meeting (rounded).
+bool segment_meets_triangle(const Vec3& a, const Vec3& b, const Triangle& t, Vec3& at) {
+  const int sa = orient3d(t[0], t[1], t[2], a), sb = orient3d(t[0], t[1], t[2], b);
+  if (sa * sb > 0) return false;
+  if (sa == 0 && sb == 0) {
+    // In the triangle's plane: the 2-D projection that keeps it a triangle decides.
+    const int drop = dropped_axis((t[1] - t[0]).cross(t[2] - t[0]));
+    const Vec2 pa = project(a, drop), pb = project(b, drop);
+    Vec2 v[3] = {project(t[0], drop), project(t[1], drop), project(t[2], drop)};
+    if (orient(v[0], v[1], v[2]) < 0) std::swap(v[1], v[2]);
+    const auto inside = [&](const Vec2& x) { return orient(v[0], v[1], x) >= 0 && orient(v[1], v[2], x) >= 0 && orient(v[2], v[0], x) >= 0; };
+    if (inside(pa)) { at = a; return true; }
+    if (inside(pb)) { at = b; return true; }
+    for (int k = 0; k < 3; ++k) {
+      const Vec2 &c = v[k], &d = v[(k + 1) % 3];
+      const int o1 = orient(pa, pb, c), o2 = orient(pa, pb, d), o3 = orient(c, d, pa), o4 = orient(c, d, pb);
+      if (o1 * o2 <= 0 && o3 * o4 <= 0 && !(o1 == 0 && o2 == 0)) {
+        at = 0.5 * (a + b);
+        return true;
+      }
+    }
+    return false;
+  }
+  // Through the plane (or ending on it): through the triangle when the line a-b passes on the
+  // same side of all three edges.
+  const int e0 = orient3d(a, b, t[0], t[1]), e1 = orient3d(a, b, t[1], t[2]), e2 = orient3d(a, b, t[2], t[0]);
+  if ((e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0)) {
+    at = segment_plane_point(a, b, t[0], (t[1] - t[0]).cross(t[2] - t[0]));
+    return true;
+  }
+  return false;
+}
+
+// A zero-area triangle against a triangle: each of its edges against the other; two zero-area
+// triangles (needles or points) are not decided and count as meeting when their boxes do (their
+// contacts are reported as on zero-area triangles: INCONCLUSIVE, never CLEAR).
+TriangleIntersection run_with_needle(const Triangle& needle, const Triangle& other) {
+  TriangleIntersection out;
+  if (collinear(other)) {
+    out.intersects = true;
+    out.segment_start = out.segment_end = needle[0];
+    return out;
+  }
+  Vec3 at;
+  for (int k = 0; k < 3; ++k)
+    if (segment_meets_triangle(needle[k], needle[(k + 1) % 3], other, at)) {
+      out.intersects = true;
+      out.segment_start = out.segment_end = at;
+      return out;
+    }
+  return out;
+}
+
 TriangleIntersection run(const Triangle& tp, const Triangle& tq, bool want_segment) {
   TriangleIntersection out;
   const Vec3 &p1 = tp[0], &q1 = tp[1], &r1 = tp[2];
@@ -232,6 +294,14 @@ TriangleIntersection run(const Triangle& tp, const Triangle& tq, bool want_segme
   const int dq2 = orient3d(p1, q1, r1, q2);
   const int dr2 = orient3d(p1, q1, r1, r2);
   if (dp2 * dq2 > 0 && dp2 * dr2 > 0) return out;
+
+  // All of one triangle's corners on the other's "plane": coplanar, or that other has no plane (a
+  // zero-area triangle, which the tests below cannot take: a needle through a face would pass).
+  if ((dp2 == 0 && dq2 == 0 && dr2 == 0 && collinear(tp)) || (dp1 == 0 && dq1 == 0 && dr1 == 0 && collinear(tq))) {
+    const bool p_needle = collinear(tp);
+    TriangleIntersection hit = p_needle ? run_with_needle(tp, tq) : run_with_needle(tq, tp);
+    return hit;
+  }
 
   const Vec3 n1 = (q1 - p1).cross(r1 - p1);
   const Vec3 n2 = (q2 - p2).cross(r2 - p2);

@@ -17,7 +17,8 @@ struct TriangleIntersection {
   Vec3 segment_end = Vec3::Zero();
 };
 
-// Exact boolean test (boundaries included). Both triangles must be non-degenerate.
+// Exact boolean test (boundaries included). A zero-area triangle is taken as its edges (a needle
+// through a face meets it); two zero-area triangles meet when their boxes do (undecided).
 bool triangles_intersect(const Triangle& p, const Triangle& q);
 
 // The same decision, plus the intersection geometry.

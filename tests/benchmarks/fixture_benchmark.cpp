@@ -67,6 +67,20 @@ std::vector<std::uint32_t> triangles_where(const TriangleMesh& mesh, On on) {
   return out;
 }
 
+// The triangles of a vertical cylinder's side (axis through (cx, cy) along z, radius r, corners
+// within z_lo..z_hi), in the mesh's own frame: every corner on the circle and the facet's normal
+// across the axis (a fanned end cap has its corners on the circle too).
+std::vector<std::uint32_t> cylinder_side(const TriangleMesh& mesh, double cx, double cy, double r, double z_lo, double z_hi) {
+  std::vector<std::uint32_t> out;
+  for (std::uint32_t t : triangles_where(mesh, [&](const Vec3& p) {
+         return std::abs(std::hypot(p.x() - cx, p.y() - cy) - r) <= 1e-6 && p.z() >= z_lo - 1e-9 && p.z() <= z_hi + 1e-9;
+       })) {
+    const Triangle tri = mesh.triangle(t);
+    if (std::abs((tri[1] - tri[0]).cross(tri[2] - tri[0]).normalized().z()) < 0.5) out.push_back(t);
+  }
+  return out;
+}
+
 // Meshed as a CAD system exports for a viewer: the angular deflection decides how many facets a
 // hole gets, and the holes carry most of the triangles (seed 004, Table 1).
 std::shared_ptr<const MeshBvh> meshed(const Result<occt::Shape>& shape, double deflection_mm, double angular_deg = 6.0) {
@@ -118,12 +132,21 @@ Scenario slot_fixture_with_nut(int frames) {
   const auto support = meshed(occt::cylinder_element(30, 50, 12), 0.05, 3.0);
   s.statics.push_back(element("support0", support, Vec3(150, 150, 0)));
   s.statics.push_back(element("support1", support, Vec3(250, 150, 0)));
+  // A stud standing on its head on the plate (the bolt turned over: head z 0 to 8, shank up to 38).
   const auto bolt = meshed(occt::hex_bolt(19, 8, 12, 30), 0.05, 3.0);
-  s.statics.push_back(element("stud", bolt, Vec3(150, 50, 0)));
+  Element stud = element("stud", bolt, Vec3(150, 50, 8));
+  stud.pose.rotation = Eigen::AngleAxisd(3.14159265358979, Vec3::UnitX()).toRotationMatrix();
+  stud.features.push_back({"shank", Vec3(0, 0, -15), Vec3::UnitZ(), 6.0, 15.0, false, cylinder_side(bolt->mesh(), 0, 0, 6.0, -30.0, 0.0)});
+  s.statics.push_back(stud);
   s.moving = element("nut", meshed(occt::hex_nut(19, 10, 12.6), 0.2, 15.0), Vec3(0, 0, 150));
-  // Over the fixture, down onto the stud's head (a real collision), beside block1 0.5 mm off,
-  // into block0's side by 2 mm, and away.
-  s.path = path_through({{Vec3(-50, -50, 150), 0}, {Vec3(150, 50, 80), 30}, {Vec3(150, 50, 5), 30}, {Vec3(150, 50, 80), 30},
+  s.moving.features.push_back({"hole", Vec3(0, 0, 5), Vec3::UnitZ(), 6.3, 5.0, true, cylinder_side(s.moving.mesh->mesh(), 0, 0, 6.3, 0.0, 10.0)});
+  // The nut's hole over the stud's shank: 0.6 mm clearance, and the hand may lean it 0.1 mm into
+  // the shank (tolerance 0.8).
+  s.mates.push_back({"hole", "stud", "shank", {0.6, 0.8}});
+  // Over the fixture, down over the stud's shank 0.3 mm off its axis (hole and shank line to line
+  // on one side: the fit's intended contact, the hole's facets 0.05 mm into the shank's), onto its
+  // head (a real collision), beside block1 0.5 mm off, into block0's side by 2 mm, and away.
+  s.path = path_through({{Vec3(-50, -50, 150), 0}, {Vec3(150, 50.3, 80), 30}, {Vec3(150, 50.3, 5), 30}, {Vec3(150, 50.3, 80), 30},
                          {Vec3(220 - 11.5, 40, 20), 0}, {Vec3(220 - 11.5, 60, 20), 0}, {Vec3(80 + 9.0, 40, 20), 0},
                          {Vec3(80 + 12.0, 40, 20), 0}, {Vec3(150, 120, 120), 45}},
                         frames);
@@ -197,9 +220,14 @@ Scenario slot_fixture_with_rhombus_pin(int frames) {
   const auto support = meshed(occt::cylinder_element(30, 60, 12), 0.02, 3.5);
   for (int k = 0; k < 2; ++k) s.statics.push_back(element("support" + std::to_string(k), support, Vec3(120 + 200 * k, 250, 0)));
   s.moving = element("rhombus_pin", meshed(occt::rhombus_pin(12, 25, 5), 0.1, 12.0), Vec3(0, 0, 150));
-  // Into the riser's hole (12 mm pin, 12 mm hole: the relief clears it only turned right), past the
-  // supports 1 mm off, and down onto block2.
-  s.path = path_through({{Vec3(-50, -50, 150), 0}, {Vec3(45, 150, 120), 0}, {Vec3(45, 150, 70), 0}, {Vec3(45, 150, 120), 0},
+  // The pin's lands in the riser's first hole (its centre at x 12, y 11 in the block's frame):
+  // 12 mm in 12 mm, a line-to-line fit the hand may lean 0.15 mm into the wall (tolerance 0.3).
+  s.moving.features.push_back({"lands", Vec3(0, 0, 12.5), Vec3::UnitZ(), 6.0, 12.5, false, cylinder_side(s.moving.mesh->mesh(), 0, 0, 6.0, 0.0, 25.0)});
+  Element& riser = s.statics[5];
+  riser.features.push_back({"hole", Vec3(12, 11, 20), Vec3::UnitZ(), 6.0, 20.0, true, cylinder_side(riser.mesh->mesh(), 12, 11, 6.0, 0.0, 40.0)});
+  s.mates.push_back({"lands", "riser", "hole", {0.0, 0.3}});
+  // 10 mm into the riser's hole, past the supports 1 mm off, and down onto block2.
+  s.path = path_through({{Vec3(-50, -50, 150), 0}, {Vec3(42, 141, 120), 0}, {Vec3(42, 141, 70), 0}, {Vec3(42, 141, 120), 0},
                          {Vec3(120 + 16.0, 230, 20), 0}, {Vec3(120 + 16.0, 270, 20), 0}, {Vec3(270, 150, 60), 45},
                          {Vec3(270, 150, 30), 45}, {Vec3(400, 300, 150), 0}},
                         frames);

@@ -122,22 +122,34 @@ TEST(TriangleMesh, ZeroAreaTrianglesAreReportedAndKept) {
   EXPECT_FALSE(mesh.is_degenerate(0));
 }
 
-TEST(TriangleMesh, ZeroAreaTrianglesAreDroppedOnRequest) {
+// On request, a zero-area triangle whose edges are all edges of triangles with area (a repeated
+// index on a tetrahedron's edge; a seam sliver A-M-B filling a T-junction, A-B on one side and
+// A-M, M-B on the other) is dropped: its points are on those edges already. A needle with an edge
+// of its own (corners off every triangle) is geometry - a wire through a plate - and is kept.
+TEST(TriangleMesh, ZeroAreaTrianglesOnOtherTrianglesEdgesAreDroppedOnRequestNeedlesKept) {
   std::vector<Vec3> vertices = kTetraVertices;
-  vertices.push_back(Vec3(0.5, 0.25, 0.125));
-  vertices.push_back(Vec3(1.5, 0.75, 0.375));
+  vertices.push_back(Vec3(0.5, 0.25, 0.125));  // 4
+  vertices.push_back(Vec3(1.5, 0.75, 0.375));  // 5: on the line through 0 and 4
   std::vector<Face> faces = {{1, 1, 2}, kTetraFaces[0], {0, 4, 5}, kTetraFaces[1], kTetraFaces[2],
                              kTetraFaces[3]};
   const Result<TriangleMesh> built = TriangleMesh::create(vertices, faces, MeshBuildOptions{true});
   ASSERT_TRUE(built.ok()) << built.error().to_string();
   const TriangleMesh& mesh = built.value();
   EXPECT_EQ(mesh.report().zero_area_triangles, (std::vector<std::uint32_t>{0, 2}));  // input indices
-  EXPECT_EQ(mesh.report().dropped_triangles, 2u);
-  ASSERT_EQ(mesh.triangle_count(), 4u);
-  EXPECT_FALSE(mesh.has_degenerate_triangles());
-  // The kept triangles are the tetrahedron's, in order, and it is closed again.
-  for (std::size_t t = 0; t < 4; ++t) EXPECT_EQ(mesh.faces()[t], kTetraFaces[t]);
-  EXPECT_TRUE(mesh.is_closed_oriented());
+  EXPECT_EQ(mesh.report().dropped_triangles, 1u);
+  ASSERT_EQ(mesh.triangle_count(), 5u);
+  EXPECT_TRUE(mesh.has_degenerate_triangles());
+  EXPECT_TRUE(mesh.is_degenerate(1));  // the needle, kept in order
+  EXPECT_EQ(mesh.faces()[1], (Face{0, 4, 5}));
+
+  // A square split on one side into two triangles meeting at M (the middle of A-B) and whole on
+  // the other, the gap at M filled by the sliver A-M-B: dropped.
+  const std::vector<Vec3> seam = {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0), Vec3(1, -1, 0)};
+  const std::vector<Face> seam_faces = {{0, 2, 3}, {2, 1, 3}, {0, 4, 1}, {0, 2, 1}};
+  const Result<TriangleMesh> seamed = TriangleMesh::create(seam, seam_faces, MeshBuildOptions{true});
+  ASSERT_TRUE(seamed.ok()) << seamed.error().to_string();
+  EXPECT_EQ(seamed.value().report().dropped_triangles, 1u);
+  EXPECT_FALSE(seamed.value().has_degenerate_triangles());
 }
 
 // ---------------------------------------------------------------------------------------------

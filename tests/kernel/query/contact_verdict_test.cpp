@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 namespace gk {
 namespace {
@@ -228,6 +229,26 @@ TEST(ContactVerdict, KnownCasesUnderABoundAtTheContactTolerance) {
   RigidTransform edge_down = RigidTransform::from_axis_angle(Vec3::UnitX(), 0.25 * 3.14159265358979323846);
   edge_down.translation = Vec3(0, 0, 2.0 * std::sqrt(2.0));
   EXPECT_EQ(assess(*floor, {}, *cube, edge_down, options).value().verdict, Verdict::kTouching);
+}
+
+// A wire (an open mesh: one triangle and a needle, a zero-area triangle) run through a plate: its
+// only contact is on the needle, which cannot be told touching from crossing: INCONCLUSIVE, never
+// CLEAR, with or without a distance bound (it was CLEAR: the needle's crossing was not seen).
+TEST(ContactVerdict, ANeedleThroughAPlateIsNeverClear) {
+  const auto plate = box(Vec3(0, 0, 0), Vec3(100, 100, 10));
+  const auto wire = MeshBvh::build(testing::share(TriangleMesh::create({Vec3(0, 0, -5), Vec3(0, 0, 10), Vec3(0, 0, 25), Vec3(1, 0, 25), Vec3(0, 1, 25)},
+                                                                       {{0, 1, 2}, {2, 3, 4}}).value())).value();
+  ASSERT_TRUE(wire->mesh().is_degenerate(0));
+  for (const double z : {0.0, 3.0, 12.0})
+    for (const double bound : {std::numeric_limits<double>::infinity(), tolerances::kContactMm, 1.0}) {
+      VerdictOptions options;
+      options.distance_upper_bound_mm = bound;
+      const VerdictResult v = assess(*plate, {}, *wire, RigidTransform::from_translation(Vec3(30, 60, z)), options).value();
+      EXPECT_EQ(v.verdict, Verdict::kInconclusive) << "z " << z << " bound " << bound;
+      EXPECT_EQ(v.inconclusive_reason, InconclusiveReason::kDegenerateTriangles);
+    }
+  // Beside the plate: CLEAR.
+  EXPECT_EQ(assess(*plate, {}, *wire, RigidTransform::from_translation(Vec3(130, 60, 0))).value().verdict, Verdict::kClear);
 }
 
 TEST(PointContainment, RayParityAgreesWithTheWindingNumber) {

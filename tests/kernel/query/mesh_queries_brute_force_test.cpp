@@ -1,6 +1,7 @@
 // The BVH queries against the all-pairs oracle on random meshes and poses: the contact pair set is
 // the same set exactly, the distance the same minimum to 1e-12 relative.
 #include "kernel/bvh/mesh_bvh.h"
+#include "kernel/core/tolerances.h"
 #include "kernel/query/mesh_collision.h"
 #include "kernel/query/mesh_distance.h"
 #include "kernel/query/triangle_distance.h"
@@ -251,6 +252,37 @@ TEST(MeshQueriesBruteForce, ContactsDistanceAndPairsWithinPrunedBySlabsEqualTheA
   // Both outcomes, or the test proves little.
   EXPECT_GT(apart, 5);
   EXPECT_GE(touching, 2);
+}
+
+// A pin in a hole, line to line on one side: two curved surfaces whose leaf boxes overlap all
+// round while few triangle pairs are near (small meshes: no slabs, boxes only). The pairs within
+// the contact distance, with each leaf pair's triangles bounded one by one, must be the
+// all-pairs set: tilted, turned, at factory offsets, touching and crossing by the facets' sag.
+TEST(MeshQueriesBruteForce, APinInItsHoleLineToLineKeepsEveryPairWithinTheContactDistance) {
+  Rng rng(31);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const auto pin = MeshBvh::build(testing::share(testing::cylinder_mesh(6.0, 30.0, 96))).value();
+  const auto hole = MeshBvh::build(testing::share(testing::cylinder_mesh(6.3, 12.0, 24))).value();
+  int found = 0;
+  for (int round = 0; round < 24; ++round) {
+    // The hole's polygon has its inradius 6.3 cos(7.5 deg) = 6.246: a pin 0.25-0.3 mm off its
+    // axis reaches its facets on one side.
+    const double off = 0.25 + 0.05 * unit(rng);
+    const double tilt = 0.01 * (2.0 * unit(rng) - 1.0), turn = 6.3 * unit(rng);
+    RigidTransform pose_hole = RigidTransform::from_axis_angle(Vec3::UnitZ(), turn);
+    if (round % 2 == 1) pose_hole.translation = Vec3(9.9e6, -2.5e6, 3.0e5);
+    const RigidTransform pin_in_hole =
+        RigidTransform::from_axis_angle(Vec3(1, 0, 0), tilt, Vec3(off * std::cos(turn), off * std::sin(turn), -10.0));
+    const RigidTransform pose_pin = pose_hole * pin_in_hole;
+    const double delta = tolerances::kContactMm;
+    const PairSet within = testing::brute_force_pairs_within(pin->mesh(), pose_pin, hole->mesh(), pose_hole, delta);
+    const ProximityResult got = pairs_within(*pin, pose_pin, *hole, pose_hole, delta).value();
+    PairSet got_set;
+    for (const ProximityPair& p : got.pairs) got_set.insert({p.triangle_a, p.triangle_b});
+    EXPECT_EQ(got_set, within) << "round " << round;
+    found += static_cast<int>(within.size());
+  }
+  EXPECT_GT(found, 50);  // the pin does reach the hole's facets
 }
 
 // A spare thread for the test: each start runs its job on a new std::thread.

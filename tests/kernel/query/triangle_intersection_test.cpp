@@ -249,6 +249,25 @@ TEST(TriangleIntersection, VertexExactlyOnFace) {
   check_named({Vec3(1.25, 0.5, -0x1p-30), q[1], q[2]}, true);
 }
 
+// A zero-area triangle (collinear corners: a needle) is its edges. Through the face, ending on
+// it, lying in its plane across it, and beside it by 2^-30 mm; both orders. (It was never
+// decided: the canonical tests need a plane on each side, and a needle through a plate passed.)
+TEST(TriangleIntersection, ANeedleIsItsEdges) {
+  const auto both = [](const Triangle& needle, bool expected, const char* what) {
+    EXPECT_EQ(triangles_intersect(kBase, needle), expected) << what;
+    EXPECT_EQ(triangles_intersect(needle, kBase), expected) << what << " (needle first)";
+  };
+  both({Vec3(1, 1, -5), Vec3(1, 1, 2), Vec3(1, 1, 7)}, true, "through the face");
+  both({Vec3(1, 1, 0), Vec3(1, 1, 2), Vec3(1, 1, 7)}, true, "ending on the face");
+  both({Vec3(1, 1, 0x1p-30), Vec3(1, 1, 2), Vec3(1, 1, 7)}, false, "ending just above it");
+  both({Vec3(-1, 1, 0), Vec3(1, 1, 0), Vec3(3, 1, 0)}, true, "in its plane, across it");
+  both({Vec3(-1, -0x1p-30, 0), Vec3(1, -0x1p-30, 0), Vec3(3, -0x1p-30, 0)}, false, "in its plane, beside it");
+  both({Vec3(-3, 1, -5), Vec3(-3, 1, 2), Vec3(-3, 1, 7)}, false, "beside it, through its plane");
+  both({Vec3(1, 1, -5), Vec3(1, 1, -5), Vec3(1, 1, 7)}, true, "a repeated corner");
+  const TriangleIntersection hit = intersect_triangles(kBase, {Vec3(1, 1, -5), Vec3(1, 1, 2), Vec3(1, 1, 7)});
+  EXPECT_LE((hit.segment_start - Vec3(1, 1, 0)).norm(), 1e-12);
+}
+
 TEST(TriangleIntersection, VertexExactlyOnEdgeAndOnVertex) {
   check_named({Vec3(2.5, 0, 0), Vec3(2, 2, 3), Vec3(3, -2, 1)}, true);       // on edge y = 0
   check_named({Vec3(2.5, -0x1p-30, 0), Vec3(2, 2, 3), Vec3(3, -2, 1)}, false);
