@@ -74,14 +74,15 @@ Vec3 closest_point_on_triangle(const Vec3& x, const Triangle& t) {
   const Vec3 ab = b - a, ac = c - a, ax = x - a;
   {
     // A sliver (twice its area below kSliverAspect times its longest edge squared) is measured
-    // in its own frame; Ericson's products below are for the rest.
-    const Vec3 bc = c - b;
-    const double l0 = ab.squaredNorm(), l1 = bc.squaredNorm(), l2 = ac.squaredNorm();
-    const int longest = l0 >= l1 && l0 >= l2 ? 0 : (l1 >= l2 ? 1 : 2);
-    const double longest_sq = std::max({l0, l1, l2});
-    const double twice_area_sq = ab.cross(ac).squaredNorm();
-    if (longest_sq > 0.0 && twice_area_sq < tolerances::kSliverAspect * tolerances::kSliverAspect * longest_sq * longest_sq)
-      return closest_point_on_sliver(x, t, longest);
+    // in its own frame; Ericson's products below are for the rest. Cheaply: (twice the area)^2 by
+    // Lagrange's identity (its rounding, eps |ab|^2 |ac|^2, is far below the threshold), and the
+    // longest edge squared at most 2 (|ab|^2 + |ac|^2), so a few more than the slivers go that way.
+    const double l0 = ab.squaredNorm(), l2 = ac.squaredNorm(), abac = ab.dot(ac);
+    const double twice_area_sq = l0 * l2 - abac * abac, sum = l0 + l2;
+    if (sum > 0.0 && twice_area_sq < 4.0 * tolerances::kSliverAspect * tolerances::kSliverAspect * sum * sum) {
+      const double l1 = (c - b).squaredNorm();
+      return closest_point_on_sliver(x, t, l0 >= l1 && l0 >= l2 ? 0 : (l1 >= l2 ? 1 : 2));
+    }
   }
   const double d1 = ab.dot(ax), d2 = ac.dot(ax);
   if (d1 <= 0.0 && d2 <= 0.0) return a;
