@@ -29,11 +29,14 @@ inline constexpr double kSlabNormalTurn = 1.0e-7;
 // perpendicular's parameters are then measured by projection, not taken from the formula. [1]
 inline constexpr double kNearlyParallelSineSquared = 1.0e-6;
 // A triangle whose width (twice its area over its longest edge) is below this fraction of its
-// longest edge is a sliver: its closest point to a point is found in a frame of that edge in
-// long double, not by barycentric products (their rounding grows as (length / width)^2:
+// longest edge is a sliver: its closest point to a point is found in a frame of that edge, not
+// by barycentric products (their rounding grows as (length / width)^2:
 // 1e-10 of the length at this ratio, a millimetre on a metre-long sliver a micrometre wide).
 // [dimensionless]
 inline constexpr double kSliverAspect = 1.0e-3;
+// ... and below this, in long double (the frame's direction error, eps (length / width) times the
+// length, is 1e-10 of the length here in double). [dimensionless]
+inline constexpr double kSliverLongDoubleAspect = 1.0e-6;
 
 // A rotation this close to orthonormal (max |R^T R - I| entry) is inverted by its transpose: it
 // misplaces a point by at most this fraction of its distance from the origin, the relative slack

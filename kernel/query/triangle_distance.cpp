@@ -11,18 +11,15 @@ namespace gk {
 
 namespace {
 
-using Vec3L = Eigen::Matrix<long double, 3, 1>;
-
-Vec3L to_long(const Vec3& v) { return v.cast<long double>(); }
-
-// The closest point to x on segment [a, b] in the 2-D frame of closest_point_on_sliver.
-void closest_on_edge_2d(long double ax, long double ay, long double bx, long double by, long double px, long double py,
-                        long double& qx, long double& qy, long double& best_sq) {
-  const long double dx = bx - ax, dy = by - ay, len_sq = dx * dx + dy * dy;
-  long double u = len_sq > 0.0L ? ((px - ax) * dx + (py - ay) * dy) / len_sq : 0.0L;
-  u = std::clamp(u, 0.0L, 1.0L);
-  const long double cx = ax + u * dx, cy = ay + u * dy;
-  const long double d_sq = (px - cx) * (px - cx) + (py - cy) * (py - cy);
+// The closest point to (px, py) on segment (a, b) in the 2-D frame of closest_point_on_sliver,
+// if nearer than best_sq so far.
+template <typename Real>
+void closest_on_edge_2d(Real ax, Real ay, Real bx, Real by, Real px, Real py, Real& qx, Real& qy, Real& best_sq) {
+  const Real dx = bx - ax, dy = by - ay, len_sq = dx * dx + dy * dy;
+  Real u = len_sq > Real(0) ? ((px - ax) * dx + (py - ay) * dy) / len_sq : Real(0);
+  u = std::clamp(u, Real(0), Real(1));
+  const Real cx = ax + u * dx, cy = ay + u * dy;
+  const Real d_sq = (px - cx) * (px - cx) + (py - cy) * (py - cy);
   if (d_sq < best_sq) {
     best_sq = d_sq;
     qx = cx;
@@ -33,38 +30,39 @@ void closest_on_edge_2d(long double ax, long double ay, long double bx, long dou
 // The closest point on a sliver (a triangle far thinner than it is long). Ericson's products
 // d1 d4 - d3 d2 cancel there (their error grows as eps (L / w)^2 L, millimetres on a metre-long
 // sliver a micrometre wide), so the triangle is laid out exactly as it is in a frame of its
-// longest edge instead: corners (0, 0), (L, 0), (s2, w), the point at (s, t) and h off the plane,
-// in long double. What remains is the frame's direction error, eps (L / w) of a long double.
+// longest edge instead: corners (0, 0), (L, 0), (s2, w), the point at (s, t). What remains is the
+// frame's direction error, eps (L / w) L: in double down to widths of 1e-6 of the length, in long
+// double below (kSliverLongDoubleAspect).
+template <typename Real>
 Vec3 closest_point_on_sliver(const Vec3& x, const Triangle& t, int longest) {
-  const Vec3L p0 = to_long(t[longest]), p1 = to_long(t[(longest + 1) % 3]), p2 = to_long(t[(longest + 2) % 3]);
-  const Vec3L e = p1 - p0;
-  const long double length = e.norm();
-  const Vec3L along = e / length;
-  const Vec3L to_p2 = p2 - p0;
-  const long double s2 = to_p2.dot(along);
-  const Vec3L across_raw = to_p2 - s2 * along;
-  const long double width = across_raw.norm();
-  if (!(width > 0.0L)) {
+  using V = Eigen::Matrix<Real, 3, 1>;
+  const V p0 = t[longest].cast<Real>(), p1 = t[(longest + 1) % 3].cast<Real>(), p2 = t[(longest + 2) % 3].cast<Real>();
+  const V e = p1 - p0;
+  const Real length = e.norm();
+  const V along = e / length;
+  const V to_p2 = p2 - p0;
+  const Real s2 = to_p2.dot(along);
+  const V across_raw = to_p2 - s2 * along;
+  const Real width = across_raw.norm();
+  if (!(width > Real(0))) {
     // Collinear corners: the nearest point of the longest edge covers the other two.
-    const long double u = std::clamp((to_long(x) - p0).dot(e) / (length * length), 0.0L, 1.0L);
-    return (p0 + u * e).cast<double>();
+    const Real u = std::clamp((x.cast<Real>() - p0).dot(e) / (length * length), Real(0), Real(1));
+    return (p0 + u * e).template cast<double>();
   }
-  const Vec3L across = across_raw / width;
-  const Vec3L rel = to_long(x) - p0;
-  const long double s = rel.dot(along), tt = rel.dot(across);
+  const V across = across_raw / width;
+  const V rel = x.cast<Real>() - p0;
+  const Real s = rel.dot(along), tt = rel.dot(across);
   // Inside the 2-D triangle (0,0), (length,0), (s2,width): above the first edge and on the inner
   // side of the other two (counter-clockwise, width > 0).
-  const auto left_of = [](long double ax, long double ay, long double bx, long double by, long double px, long double py) {
-    return (bx - ax) * (py - ay) - (by - ay) * (px - ax) >= 0.0L;
-  };
-  long double qx = s, qy = tt;
-  if (!(tt >= 0.0L && left_of(length, 0.0L, s2, width, s, tt) && left_of(s2, width, 0.0L, 0.0L, s, tt))) {
-    long double best_sq = std::numeric_limits<long double>::infinity();
-    closest_on_edge_2d(0.0L, 0.0L, length, 0.0L, s, tt, qx, qy, best_sq);
-    closest_on_edge_2d(length, 0.0L, s2, width, s, tt, qx, qy, best_sq);
-    closest_on_edge_2d(s2, width, 0.0L, 0.0L, s, tt, qx, qy, best_sq);
+  const auto left_of = [](Real ax, Real ay, Real bx, Real by, Real px, Real py) { return (bx - ax) * (py - ay) - (by - ay) * (px - ax) >= Real(0); };
+  Real qx = s, qy = tt;
+  if (!(tt >= Real(0) && left_of(length, Real(0), s2, width, s, tt) && left_of(s2, width, Real(0), Real(0), s, tt))) {
+    Real best_sq = std::numeric_limits<Real>::infinity();
+    closest_on_edge_2d<Real>(Real(0), Real(0), length, Real(0), s, tt, qx, qy, best_sq);
+    closest_on_edge_2d<Real>(length, Real(0), s2, width, s, tt, qx, qy, best_sq);
+    closest_on_edge_2d<Real>(s2, width, Real(0), Real(0), s, tt, qx, qy, best_sq);
   }
-  return (p0 + qx * along + qy * across).cast<double>();
+  return (p0 + qx * along + qy * across).template cast<double>();
 }
 
 }  // namespace
@@ -81,7 +79,11 @@ Vec3 closest_point_on_triangle(const Vec3& x, const Triangle& t) {
     const double twice_area_sq = l0 * l2 - abac * abac, sum = l0 + l2;
     if (sum > 0.0 && twice_area_sq < 4.0 * tolerances::kSliverAspect * tolerances::kSliverAspect * sum * sum) {
       const double l1 = (c - b).squaredNorm();
-      return closest_point_on_sliver(x, t, l0 >= l1 && l0 >= l2 ? 0 : (l1 >= l2 ? 1 : 2));
+      const int longest = l0 >= l1 && l0 >= l2 ? 0 : (l1 >= l2 ? 1 : 2);
+      const double longest_sq = std::max({l0, l1, l2});
+      constexpr double k = tolerances::kSliverLongDoubleAspect;
+      if (twice_area_sq < k * k * longest_sq * longest_sq) return closest_point_on_sliver<long double>(x, t, longest);
+      return closest_point_on_sliver<double>(x, t, longest);
     }
   }
   const double d1 = ab.dot(ax), d2 = ac.dot(ax);
