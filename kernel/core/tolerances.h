@@ -103,6 +103,11 @@ inline constexpr int kTouchingSweepMaxPoses = 1000;
 // triangle in a hole's list, a blind hole's floor, would make whatever meets it "intended").
 // [relative]
 inline constexpr double kMaxFeatureDeviationRelative = 0.05;
+// ... but their corners lie on it within this fraction of the radius (a slot: of half its width;
+// a slot's walls are planes, so their triangles have no sag at all): the allowance above is for
+// the facets' sag between corners, not for a size the mesh does not have (a bore meshed at r 9.6
+// declared r 10 let a pin 0.35 mm into its wall count as the fit's). [relative]
+inline constexpr double kMaxFeatureCornerOffRelative = 1.0e-3;
 // A pose computed between two frames (kernel/query/rigid_sweep: pose_between) places points to
 // within this fraction of their coordinates' magnitude (64 rounding units of a double): a crossing
 // found there that a shift this large frees is the interpolation's own rounding (a part tipped
