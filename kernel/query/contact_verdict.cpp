@@ -144,15 +144,15 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
   const bool oriented = a.mesh().is_closed_oriented() && b.mesh().is_closed_oriented();
 
   // The distance query's bound: the caller's, but at least twice the contact tolerance (never
-  // below kContactMm), so that nothing found within it is CLEAR, never TOUCHING.
+  // below kContactMm), so that a pair with nothing found within it is CLEAR, never TOUCHING.
   const double touch_margin = std::max(options.contact_tolerance_mm, tolerances::kContactMm);
   DistanceRequest dreq;
   dreq.stop = options.stop;
   dreq.spare = options.spare;
   if (std::isfinite(options.distance_upper_bound_mm)) dreq.upper_bound_mm = std::max(options.distance_upper_bound_mm, 2.0 * touch_margin);
   // With a bound, measured first: nothing within it, or nearest farther than the contact tolerance,
-  // and no pair can cross or touch (the query's rounding is orders below kContactMm at coordinates
-  // up to kMaxCoordinateMm), so the all-contacts search is skipped: near long parallel surfaces it
+  // and no pair can cross or touch (the query's rounding, slivers included, is orders below
+  // kContactMm at coordinates up to kMaxCoordinateMm), so the all-contacts search is skipped: near long parallel surfaces it
   // costs as much as the measure. Surfaces that meet end the measure at once (distance 0).
   const RigidTransform b_in_a = relative_transform(pose_a, pose_b);
   std::optional<DistanceResult> measured_first;
