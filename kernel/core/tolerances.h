@@ -37,6 +37,10 @@ inline constexpr double kSliverAspect = 1.0e-3;
 // ... and below this, in long double (the frame's direction error, eps (length / width) times the
 // length, is 1e-10 of the length here in double). [dimensionless]
 inline constexpr double kSliverLongDoubleAspect = 1.0e-6;
+// A closest point on a triangle is off by at most about 1e-10 of the triangle's size and the
+// distance (the slivers above measured in their own frame); a bound built on one takes off this
+// fraction of those lengths, with room to spare. [relative]
+inline constexpr double kClosestPointRoundingRelative = 1.0e-9;
 
 // A rotation this close to orthonormal (max |R^T R - I| entry) is inverted by its transpose: it
 // misplaces a point by at most this fraction of its distance from the origin, the relative slack

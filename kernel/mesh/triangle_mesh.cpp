@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <set>
 #include <string>
 
 namespace gk {
@@ -52,18 +51,21 @@ Result<TriangleMesh> TriangleMesh::create(std::vector<Vec3> vertices, std::vecto
   // Only a zero-area triangle whose edges are all edges of triangles with area is dropped (a
   // sliver along a seam: its points lie on those edges already). One with an edge of its own (a
   // needle, a wire) is geometry: kept, and a contact on it is reported as on zero-area triangles.
-  std::set<std::pair<std::uint32_t, std::uint32_t>> area_edges;
+  // (The edges are listed only when there is something to drop: most meshes have no such triangle.)
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> area_edges;
   std::vector<std::uint8_t> area_vertex;
-  if (options.drop_zero_area_triangles) {
+  if (options.drop_zero_area_triangles && std::find(zero_area.begin(), zero_area.end(), 1) != zero_area.end()) {
     area_vertex.assign(mesh.vertices_.size(), 0);
+    area_edges.reserve(3 * faces.size());
     for (std::size_t t = 0; t < faces.size(); ++t) {
       if (zero_area[t]) continue;
       for (int k = 0; k < 3; ++k) {
         const std::uint32_t u = faces[t][k], v = faces[t][(k + 1) % 3];
-        area_edges.insert({std::min(u, v), std::max(u, v)});
+        area_edges.push_back({std::min(u, v), std::max(u, v)});
         area_vertex[u] = 1;
       }
     }
+    std::sort(area_edges.begin(), area_edges.end());
   }
   const auto covered = [&](const Face& f) {
     bool any_edge = false;
@@ -71,7 +73,7 @@ Result<TriangleMesh> TriangleMesh::create(std::vector<Vec3> vertices, std::vecto
       const std::uint32_t u = f[k], v = f[(k + 1) % 3];
       if (u == v) continue;
       any_edge = true;
-      if (!area_edges.count({std::min(u, v), std::max(u, v)})) return false;
+      if (!std::binary_search(area_edges.begin(), area_edges.end(), std::make_pair(std::min(u, v), std::max(u, v)))) return false;
     }
     return any_edge || area_vertex[f[0]] != 0;  // a point: covered if a triangle with area has it
   };

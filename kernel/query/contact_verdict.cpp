@@ -152,8 +152,9 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
   if (std::isfinite(options.distance_upper_bound_mm)) dreq.upper_bound_mm = std::max(options.distance_upper_bound_mm, 2.0 * touch_margin);
   // With a bound, measured first: nothing within it, or nearest farther than the contact tolerance,
   // and no pair can cross or touch (the query's rounding, slivers included, is orders below
-  // kContactMm at coordinates up to kMaxCoordinateMm), so the all-contacts search is skipped: near long parallel surfaces it
-  // costs as much as the measure. Surfaces that meet end the measure at once (distance 0).
+  // kContactMm at coordinates up to kMaxCoordinateMm), so the all-contacts search is skipped: near
+  // long parallel surfaces it costs as much as the measure. Surfaces that meet end the measure at
+  // once (distance 0).
   const RigidTransform b_in_a = relative_transform(pose_a, pose_b);
   std::optional<DistanceResult> measured_first;
   if (std::isfinite(dreq.upper_bound_mm)) {

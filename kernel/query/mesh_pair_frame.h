@@ -157,9 +157,8 @@ class MeshPairFrame {
     }
     // A NaN (never expected, but a bound must not prune on one) counts as no bound.
     if (!(nearest == nearest)) return box;
-    // The closest point's own rounding (closest_point_on_triangle: within about 1e-10 of the
-    // triangle's size and the distance, kSliverAspect) is taken off with room to spare.
-    const double rounding = 1e-9 * (nearest + radius + leaf_reach);
+    // The closest point's own rounding is taken off (kClosestPointRoundingRelative).
+    const double rounding = tolerances::kClosestPointRoundingRelative * (nearest + radius + leaf_reach);
     return std::max(box, nearest - radius - slack_ - rounding);
   }
 

@@ -297,11 +297,9 @@ TriangleIntersection run(const Triangle& tp, const Triangle& tq, bool want_segme
 
   // All of one triangle's corners on the other's "plane": coplanar, or that other has no plane (a
   // zero-area triangle, which the tests below cannot take: a needle through a face would pass).
-  if ((dp2 == 0 && dq2 == 0 && dr2 == 0 && collinear(tp)) || (dp1 == 0 && dq1 == 0 && dr1 == 0 && collinear(tq))) {
-    const bool p_needle = collinear(tp);
-    TriangleIntersection hit = p_needle ? run_with_needle(tp, tq) : run_with_needle(tq, tp);
-    return hit;
-  }
+  const bool p_needle = dp2 == 0 && dq2 == 0 && dr2 == 0 && collinear(tp);
+  if (p_needle) return run_with_needle(tp, tq);
+  if (dp1 == 0 && dq1 == 0 && dr1 == 0 && collinear(tq)) return run_with_needle(tq, tp);
 
   const Vec3 n1 = (q1 - p1).cross(r1 - p1);
   const Vec3 n2 = (q2 - p2).cross(r2 - p2);
