@@ -38,6 +38,7 @@ bool test_leaves(const MeshPairFrame& frame, int leaf_a, int leaf_b, const Colli
     if (frame.triangle_to_node_a_bound(tb, leaf_a, kAnyGap) > 0.0) continue;
     for (int ka = first_a; ka <= frame.end_a(leaf_a); ++ka) {
       if (bound_a && a_apart[static_cast<std::size_t>(ka - first_a)]) continue;
+      if (request.settled && request.settled->skip_triangles(ka, kb, true)) continue;
       ++result.stats.triangle_pairs_tested;
       const Triangle ta = a.ordered_triangle(ka);
       const TriangleIntersection hit = intersect_triangles(ta, tb);
@@ -71,6 +72,7 @@ Result<CollisionResult> collide(const MeshBvh& a, const RigidTransform& pose_a, 
   MeshPairFrame& frame = made.value();
   frame.use_slabs();
   CollisionResult result;
+  if (request.settled && !request.settled->labels(a, b)) return invalid_argument("settled", "labels made for other trees");
 
   // Depth-first over node pairs; the stack never holds more than depth(A) + depth(B) + 2 entries.
   std::array<NodePair, 2 * kMaxBvhDepth + 4> stack;
@@ -80,6 +82,7 @@ Result<CollisionResult> collide(const MeshBvh& a, const RigidTransform& pose_a, 
     const NodePair p = stack[--top];
     if ((result.stats.node_pairs_tested++ & kStopCheckMask) == 0 && request.stop && request.stop->stop_requested())
       return stopped("the collision query");
+    if (request.settled && request.settled->skip_nodes(p.a, p.b, true)) continue;
     if (!frame.nodes_overlap(p.a, p.b) || frame.slabs_separate(p.a, p.b)) continue;
     const bool leaf_a = frame.is_leaf_a(p.a), leaf_b = frame.is_leaf_b(p.b);
     if (leaf_a && leaf_b) {

@@ -3,6 +3,7 @@
 
 #include "kernel/bvh/mesh_bvh.h"
 #include "kernel/query/mesh_pair_frame.h"
+#include "kernel/query/settled_pairs.h"
 #include "kernel/core/rigid_transform.h"
 #include "kernel/core/status.h"
 #include "kernel/core/stop_token.h"
@@ -18,6 +19,8 @@ struct CollisionRequest {
   std::size_t max_contacts = std::numeric_limits<std::size_t>::max();
   // Asked every few thousand node pairs: a caller that gave up ends the traversal (kStopped).
   const StopToken* stop = nullptr;
+  // Pairs of triangle groups the caller has decided already: skipped, their contacts not reported.
+  const SettledPairs* settled = nullptr;
 };
 
 // One intersecting triangle pair, in world coordinates.

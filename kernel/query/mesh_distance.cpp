@@ -149,6 +149,69 @@ struct Search {
   }
 };
 
+// How far p lies from a node's box (0 inside it).
+double distance_to_box(const Vec3& p, const BvhNode& node) {
+  return (p - p.cwiseMax(node.lower()).cwiseMin(node.upper())).norm();
+}
+
+// The first settled pair within delta_mm, looked for nearest first: by the node pairs' lower
+// bound, then by how far their boxes lie from the caller's hint (two curved surfaces in line
+// contact, a pin pressed to one side of its hole, have every overlapping box pair at bound 0, and
+// the pairs within reach along one line), else from each other's centres. None when no settled
+// pair is within delta_mm.
+std::optional<ProximityPair> settled_within(const MeshPairFrame& frame, const SettledPairs& settled, const std::optional<Vec3>& hint_in_a,
+                                            double delta_mm, QueryStats& stats, const StopToken& stop, bool& stopped_early) {
+  struct Queued {
+    double bound, away;
+    int a, b;
+  };
+  const auto later = [](const Queued& x, const Queued& y) { return std::tie(x.bound, x.away) > std::tie(y.bound, y.away); };
+  const std::optional<Vec3> hint_in_b =
+      hint_in_a ? std::optional<Vec3>(frame.b_in_a().inverse().apply(*hint_in_a)) : std::nullopt;
+  std::vector<Queued> heap;
+  const double cutoff = std::nextafter(delta_mm, 1e300);
+  const auto push = [&](int na, int nb) {
+    if (!settled.may_hold_settled(na, nb)) return;
+    const double bound = frame.pair_lower_bound(na, nb, cutoff);
+    if (bound > delta_mm) return;
+    const double away = hint_in_a ? distance_to_box(*hint_in_a, frame.a().node(na)) + distance_to_box(*hint_in_b, frame.b().node(nb))
+                                  : (frame.b_in_a().apply(frame.b().node(nb).center()) - frame.a().node(na).center()).norm();
+    heap.push_back({bound, away, na, nb});
+    std::push_heap(heap.begin(), heap.end(), later);
+  };
+  push(0, 0);
+  while (!heap.empty()) {
+    std::pop_heap(heap.begin(), heap.end(), later);
+    const Queued q = heap.back();
+    heap.pop_back();
+    if ((stats.node_pairs_tested++ & kStopCheckMask) == 0 && stop.stop_requested()) {
+      stopped_early = true;
+      return std::nullopt;
+    }
+    const bool leaf_a = frame.is_leaf_a(q.a), leaf_b = frame.is_leaf_b(q.b);
+    if (leaf_a && leaf_b) {
+      for (int ka = frame.begin_a(q.a); ka <= frame.end_a(q.a); ++ka)
+        for (int kb = frame.begin_b(q.b); kb <= frame.end_b(q.b); ++kb) {
+          if (!settled.triangles_settled(ka, kb) || settled.skip_triangles(ka, kb, false)) continue;
+          ++stats.triangle_pairs_tested;
+          const TriangleDistance d = triangle_distance(frame.a().ordered_triangle(ka), frame.b_triangle_in_a(kb), cutoff);
+          if (!d.bounded_only && d.distance <= delta_mm)
+            return ProximityPair{frame.a().mesh_triangle_index(ka), frame.b().mesh_triangle_index(kb), d.distance, frame.to_world(d.on_p),
+                                 frame.to_world(d.on_q)};
+        }
+      continue;
+    }
+    if (!leaf_a && (leaf_b || frame.size_a(q.a) >= frame.size_b(q.b))) {
+      push(frame.first_child_a(q.a), q.b);
+      push(frame.second_child_a(q.a), q.b);
+    } else {
+      push(q.a, frame.first_child_b(q.b));
+      push(q.a, frame.second_child_b(q.b));
+    }
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 Result<DistanceResult> distance(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
@@ -218,14 +281,22 @@ Result<DistanceResult> distance(const MeshBvh& a, const RigidTransform& pose_a, 
 
 Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
                                      const RigidTransform& pose_b, double delta_mm, std::size_t max_pairs,
-                                     const StopToken& stop) {
+                                     const StopToken& stop, const SettledPairs* settled) {
   if (!(delta_mm >= 0.0) || !std::isfinite(delta_mm))
     return invalid_argument("delta_mm", "must be a finite, non-negative distance");
+  if (settled && !settled->labels(a, b)) return invalid_argument("settled", "labels made for other trees");
   auto made = MeshPairFrame::make(a, pose_a, b, pose_b);
   if (!made.ok()) return made.error();
   MeshPairFrame& frame = made.value();
   frame.use_slabs();
   ProximityResult result;
+  // A settled pair within reach first: found (or none there), every settled pair may be skipped.
+  if (settled && !settled->groups.empty()) {
+    bool stopped_early = false;
+    const std::optional<Vec3> hint = settled->hint ? std::optional<Vec3>(pose_a.inverse().apply(*settled->hint)) : std::nullopt;
+    result.settled_witness = settled_within(frame, *settled, hint, delta_mm, result.stats, stop, stopped_early);
+    if (stopped_early) return stopped("the pairs within the gap");
+  }
 
   std::array<std::pair<int, int>, 2 * kMaxBvhDepth + 4> stack;
   int top = 0;
@@ -233,6 +304,8 @@ Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pos
   while (top > 0 && !result.truncated) {
     const auto [na, nb] = stack[--top];
     if ((result.stats.node_pairs_tested++ & kStopCheckMask) == 0 && stop.stop_requested()) return stopped("the pairs within the gap");
+    // Settled pairs need looking at only until one of them is found within reach.
+    if (settled && settled->skip_nodes(na, nb, true)) continue;
     if (frame.pair_lower_bound(na, nb, std::nextafter(delta_mm, 1e300)) > delta_mm) continue;
     const bool leaf_a = frame.is_leaf_a(na), leaf_b = frame.is_leaf_b(nb);
     if (leaf_a && leaf_b) {
@@ -251,6 +324,7 @@ Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pos
         if (frame.triangle_to_node_a_bound(tb, na, cutoff) > delta_mm) continue;
         for (int ka = first_a; ka <= frame.end_a(na); ++ka) {
           if (bound_a && a_bound[static_cast<std::size_t>(ka - first_a)] > delta_mm) continue;
+          if (settled && settled->skip_triangles(ka, kb, true)) continue;
           ++result.stats.triangle_pairs_tested;
           const TriangleDistance d = triangle_distance(a.ordered_triangle(ka), tb, std::nextafter(delta_mm, 1e300));
           if (!d.bounded_only && d.distance <= delta_mm) {

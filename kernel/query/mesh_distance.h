@@ -4,6 +4,7 @@
 
 #include "kernel/bvh/mesh_bvh.h"
 #include "kernel/query/mesh_pair_frame.h"
+#include "kernel/query/settled_pairs.h"
 #include "kernel/core/rigid_transform.h"
 #include "kernel/core/spare_thread.h"
 #include "kernel/core/status.h"
@@ -11,6 +12,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <vector>
 
 namespace gk {
@@ -55,14 +57,17 @@ struct ProximityPair {
 struct ProximityResult {
   std::vector<ProximityPair> pairs;  // ordered by triangle ids
   bool truncated = false;            // max_pairs was reached: the list is incomplete
+  // With settled pairs: the first settled pair found within delta_mm, standing for all of them (the
+  // others are skipped once one is found, and never listed in pairs).
+  std::optional<ProximityPair> settled_witness;
   QueryStats stats;
 };
 
 // Every triangle pair at distance <= delta_mm (touching and intersecting pairs included), up to
-// max_pairs of them.
+// max_pairs of them; pairs of settled groups (optional) apart, as above.
 Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
                                      const RigidTransform& pose_b, double delta_mm,
                                      std::size_t max_pairs = std::numeric_limits<std::size_t>::max(),
-                                     const StopToken& stop = {});
+                                     const StopToken& stop = {}, const SettledPairs* settled = nullptr);
 
 }  // namespace gk

@@ -195,10 +195,15 @@ Scenario slot_fixture_with_bolt(int frames) {
   }
   s.moving.features.push_back({"shank", Vec3(0, 0, -18), Vec3::UnitZ(), 6.0, 22.0, false, side});
   const TriangleMesh& base = s.statics[0].mesh->mesh();
-  s.statics[0].slots.push_back({"slot50", Vec3(200, 50, -5.25), Vec3::UnitY(), Vec3::UnitX(), 14.0, 200.0, 5.25,
-                                triangles_where(base, [](const Vec3& p) {
-                                  return (std::abs(p.y() - 43.0) <= 1e-9 || std::abs(p.y() - 57.0) <= 1e-9) && p.z() >= -10.5 - 1e-9;
-                                })});
+  // (The walls only: a triangle of the plate's end face may have its corners on both walls' lines.)
+  std::vector<std::uint32_t> walls;
+  for (std::uint32_t t : triangles_where(base, [](const Vec3& p) {
+         return (std::abs(p.y() - 43.0) <= 1e-9 || std::abs(p.y() - 57.0) <= 1e-9) && p.z() >= -10.5 - 1e-9;
+       })) {
+    const Triangle tri = base.triangle(t);
+    if (std::abs((tri[1] - tri[0]).cross(tri[2] - tri[0]).normalized().y()) > 0.999) walls.push_back(t);
+  }
+  s.statics[0].slots.push_back({"slot50", Vec3(200, 50, -5.25), Vec3::UnitY(), Vec3::UnitX(), 14.0, 200.0, 5.25, walls});
   // A fit that lets the shank lean 0.5 mm into a wall (clearance 2, tolerance 3): the hand's
   // wobble of 0.01 rad tilts it by up to 0.4 mm over its length.
   s.mates.push_back({"shank", "base", "slot50", {2.0, 3.0}});
