@@ -122,14 +122,21 @@ Result<Shape> cylinder_element(double diameter_mm, double height_mm, double hole
   });
 }
 
-Result<Shape> locator_element(double body_diameter_mm, double body_height_mm, double pin_diameter_mm, double pin_height_mm) {
+Result<Shape> locator_element(double body_diameter_mm, double body_height_mm, double pin_diameter_mm, double pin_height_mm,
+                              double spigot_diameter_mm, double spigot_length_mm) {
   if (!positive({body_diameter_mm, body_height_mm, pin_diameter_mm, pin_height_mm}) || pin_diameter_mm >= body_diameter_mm)
     return invalid_argument("locator", "sizes must be positive, the pin narrower than the body");
+  const bool spigot = spigot_length_mm > 0.0;
+  if (spigot_length_mm < 0.0 || !std::isfinite(spigot_length_mm) ||
+      (spigot && !(spigot_diameter_mm > 0.0 && spigot_diameter_mm < body_diameter_mm && std::isfinite(spigot_diameter_mm))))
+    return invalid_argument("locator", "a spigot's sizes must be positive, the spigot narrower than the body");
   return built("locator", [&] {
     const TopoDS_Shape collar = cylinder(0, 0, 0, 0.65 * body_diameter_mm, 0.15 * body_height_mm);
     const TopoDS_Shape body = cylinder(0, 0, 0, 0.5 * body_diameter_mm, body_height_mm);
     const TopoDS_Shape pin = cylinder(0, 0, body_height_mm, 0.5 * pin_diameter_mm, pin_height_mm);
-    return BRepAlgoAPI_Fuse(BRepAlgoAPI_Fuse(collar, body).Shape(), pin).Shape();
+    TopoDS_Shape locator = BRepAlgoAPI_Fuse(BRepAlgoAPI_Fuse(collar, body).Shape(), pin).Shape();
+    if (spigot) locator = BRepAlgoAPI_Fuse(locator, cylinder(0, 0, -spigot_length_mm, 0.5 * spigot_diameter_mm, spigot_length_mm)).Shape();
+    return locator;
   });
 }
 

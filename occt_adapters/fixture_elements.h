@@ -24,8 +24,11 @@ Result<Shape> base_plate(double length_mm, double width_mm, double thickness_mm,
 Result<Shape> block_element(double length_mm, double width_mm, double height_mm, const HoleGrid& holes);
 // A cylindrical support with a coaxial through hole.
 Result<Shape> cylinder_element(double diameter_mm, double height_mm, double hole_diameter_mm);
-// A locator: a cylindrical body with a collar at its foot and a thinner locating pin on top.
-Result<Shape> locator_element(double body_diameter_mm, double body_height_mm, double pin_diameter_mm, double pin_height_mm);
+// A locator: a cylindrical body with a collar at its foot and a thinner locating pin on top; with a
+// spigot (spigot_length_mm > 0), a locating spigot below the collar (z from -length to 0) that goes
+// into a base plate's hole.
+Result<Shape> locator_element(double body_diameter_mm, double body_height_mm, double pin_diameter_mm, double pin_height_mm,
+                              double spigot_diameter_mm = 0.0, double spigot_length_mm = 0.0);
 // A rhombus (diamond) pin: a locating pin relieved on two sides, as used with a round pin so the
 // part is not over-constrained.
 Result<Shape> rhombus_pin(double diameter_mm, double height_mm, double land_width_mm);

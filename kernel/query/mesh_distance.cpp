@@ -281,7 +281,8 @@ Result<DistanceResult> distance(const MeshBvh& a, const RigidTransform& pose_a, 
 
 Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
                                      const RigidTransform& pose_b, double delta_mm, std::size_t max_pairs,
-                                     const StopToken& stop, const SettledPairs* settled) {
+                                     const StopToken& stop, const SettledPairs* settled,
+                                     const std::function<bool(const ProximityPair&)>& enough) {
   if (!(delta_mm >= 0.0) || !std::isfinite(delta_mm))
     return invalid_argument("delta_mm", "must be a finite, non-negative distance");
   if (settled && !settled->labels(a, b)) return invalid_argument("settled", "labels made for other trees");
@@ -319,7 +320,7 @@ Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pos
       if (bound_a)
         for (int i = 0; i < count_a; ++i)
           a_bound[static_cast<std::size_t>(i)] = frame.triangle_to_node_b_bound(frame.a_triangle_in_b(first_a + i), nb, cutoff);
-      for (int kb = frame.begin_b(nb); kb <= frame.end_b(nb); ++kb) {
+      for (int kb = frame.begin_b(nb); kb <= frame.end_b(nb) && !result.truncated; ++kb) {
         const Triangle tb = frame.b_triangle_in_a(kb);
         if (frame.triangle_to_node_a_bound(tb, na, cutoff) > delta_mm) continue;
         for (int ka = first_a; ka <= frame.end_a(na); ++ka) {
@@ -334,6 +335,10 @@ Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pos
             }
             result.pairs.push_back({a.mesh_triangle_index(ka), b.mesh_triangle_index(kb), d.distance,
                                     frame.to_world(d.on_p), frame.to_world(d.on_q)});
+            if (enough && enough(result.pairs.back())) {
+              result.truncated = true;
+              break;
+            }
           }
         }
       }

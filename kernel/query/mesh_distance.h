@@ -11,6 +11,7 @@
 #include "kernel/core/stop_token.h"
 
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <vector>
@@ -64,10 +65,13 @@ struct ProximityResult {
 };
 
 // Every triangle pair at distance <= delta_mm (touching and intersecting pairs included), up to
-// max_pairs of them; pairs of settled groups (optional) apart, as above.
+// max_pairs of them; pairs of settled groups (optional) apart, as above. `enough` (optional) is
+// asked of each pair as it is found: true ends the search there (truncated is then set, and the
+// pair is the list's last).
 Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
                                      const RigidTransform& pose_b, double delta_mm,
                                      std::size_t max_pairs = std::numeric_limits<std::size_t>::max(),
-                                     const StopToken& stop = {}, const SettledPairs* settled = nullptr);
+                                     const StopToken& stop = {}, const SettledPairs* settled = nullptr,
+                                     const std::function<bool(const ProximityPair&)>& enough = {});
 
 }  // namespace gk

@@ -165,11 +165,19 @@ Scenario hole_fixture_with_locator(int frames) {
   const auto support = meshed(occt::cylinder_element(30, 60, 12), 0.03);
   for (int k = 0; k < 3; ++k) s.statics.push_back(element("support" + std::to_string(k), support, Vec3(150 + 50 * k, 200, 0)));
   s.statics.push_back(element("clamp", meshed(occt::strap_clamp(100, 30, 15, 13), 0.03), Vec3(150, 100, 40)));
-  s.moving = element("locator", meshed(occt::locator_element(20, 30, 10, 15), 0.02, 20.0), Vec3(0, 0, 150));
-  // The locator comes down to stand 0.5 mm above the plate between holes, passes 1 mm over the
-  // clamp, and is pushed into a support's side.
-  s.path = path_through({{Vec3(-60, 150, 150), 0}, {Vec3(125, 125, 60), 0}, {Vec3(125, 125, 0.5), 0}, {Vec3(125, 125, 30), 0},
-                         {Vec3(200, 100, 56), 10}, {Vec3(230, 100, 56), 20}, {Vec3(200, 170, 10), 0}, {Vec3(200, 178, 10), 0},
+  // The locator has a spigot below its collar (11.9 mm, 10 long) that locates it in a plate hole.
+  s.moving = element("locator", meshed(occt::locator_element(20, 30, 10, 15, 11.9, 10), 0.03, 25.0), Vec3(0, 0, 150));
+  s.moving.features.push_back({"spigot", Vec3(0, 0, -5), Vec3::UnitZ(), 5.95, 5.0, false, cylinder_side(s.moving.mesh->mesh(), 0, 0, 5.95, -10.0, 0.0)});
+  Element& base = s.statics[0];
+  base.features.push_back({"hole150", Vec3(150, 150, -15), Vec3::UnitZ(), 6.0, 15.0, true, cylinder_side(base.mesh->mesh(), 150, 150, 6.0, -30.0, 0.0)});
+  // A loose locating fit (clearance 0.1 mm, tolerance 0.3): the hand's 0.01 rad wobble leans the
+  // spigot up to 0.1 mm at its end, pressing it up to 0.05 mm into the hole's wall.
+  s.mates.push_back({"spigot", "base", "hole150", {0.1, 0.3}});
+  // The locator comes down with its spigot into the plate's hole at (150, 150) until its collar
+  // stands 0.5 mm above the plate, lifts out, passes 1 mm over the clamp with the spigot's end,
+  // and is pushed into a support's side.
+  s.path = path_through({{Vec3(-60, 150, 150), 0}, {Vec3(150, 150, 60), 0}, {Vec3(150, 150, 0.5), 0}, {Vec3(150, 150, 30), 0},
+                         {Vec3(200, 100, 66), 10}, {Vec3(230, 100, 66), 20}, {Vec3(200, 170, 20), 0}, {Vec3(200, 178, 20), 0},
                          {Vec3(350, 250, 150), 0}},
                         frames);
   return s;
