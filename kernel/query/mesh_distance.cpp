@@ -24,6 +24,9 @@ struct BoundedPair {
   double lower_bound;
 };
 
+// The bound of a node pair left out of a distance query (DistanceRequest::excluded).
+constexpr double kOutOfReach = std::numeric_limits<double>::infinity();
+
 // A search with this many node pairs queued is dealt out to a spare thread, when there is one.
 constexpr std::size_t kSplitFrontier = 64;
 
@@ -58,6 +61,7 @@ struct Search {
   bool stop_asked = false;  // the caller gave up
 
   void measure(int ka, int kb, const Triangle& tb) {
+    if (request.excluded && request.excluded->triangles_settled(ka, kb)) return;
     ++stats.triangle_pairs_tested;
     const TriangleDistance d = triangle_distance(a.ordered_triangle(ka), tb, best);
     if (!d.bounded_only && d.distance < best) {
@@ -126,8 +130,10 @@ struct Search {
         near = {p.a, frame.first_child_b(p.b), 0.0};
         far = {p.a, frame.second_child_b(p.b), 0.0};
       }
-      near.lower_bound = frame.pair_lower_bound(near.a, near.b, best);
-      far.lower_bound = frame.pair_lower_bound(far.a, far.b, best);
+      // A pair wholly of excluded groups is left out as if out of reach.
+      const auto excluded = [&](const BoundedPair& x) { return request.excluded && request.excluded->nodes_settled(x.a, x.b); };
+      near.lower_bound = excluded(near) ? kOutOfReach : frame.pair_lower_bound(near.a, near.b, best);
+      far.lower_bound = excluded(far) ? kOutOfReach : frame.pair_lower_bound(far.a, far.b, best);
       stats.node_pairs_tested += 2;
       if (far.lower_bound < near.lower_bound) std::swap(near, far);
       if (far.lower_bound < best) {
@@ -219,6 +225,7 @@ Result<DistanceResult> distance(const MeshBvh& a, const RigidTransform& pose_a, 
   if (std::isnan(request.upper_bound_mm) || request.upper_bound_mm < 0.0)
     return invalid_argument("upper_bound_mm", "must be a non-negative number or infinity");
   if (std::isnan(request.stop_below_mm)) return invalid_argument("stop_below_mm", "is NaN");
+  if (request.excluded && !request.excluded->labels(a, b)) return invalid_argument("excluded", "labels made for other trees");
   auto made = MeshPairFrame::make(a, pose_a, b, pose_b);
   if (!made.ok()) return made.error();
   MeshPairFrame& frame = made.value();
@@ -230,7 +237,8 @@ Result<DistanceResult> distance(const MeshBvh& a, const RigidTransform& pose_a, 
   Search first(frame, a, request, queue, nullptr, request.upper_bound_mm);
   first.stats.node_pairs_tested = 1;
   const bool may_split = request.spare != nullptr && request.stop_below_mm < 0.0;
-  bool done = first.run({0, 0, frame.nodes_lower_bound(0, 0)}, true, may_split ? kSplitFrontier : SIZE_MAX);
+  const double root_bound = request.excluded && request.excluded->nodes_settled(0, 0) ? kOutOfReach : frame.nodes_lower_bound(0, 0);
+  bool done = first.run({0, 0, root_bound}, true, may_split ? kSplitFrontier : SIZE_MAX);
   DistanceResult result;
   if (!done) {
     // Deal the queued pairs out by their bounds, alternately, so that each search has its share

@@ -31,6 +31,9 @@ struct DistanceRequest {
   // the two, which share the best distance found. The minimum is the same; of two witness pairs
   // at exactly that distance the one with the lower triangle ids is kept.
   SpareThread* spare = nullptr;
+  // Pairs of these settled groups are left out (SettledPairs::groups; its `apart` list is not
+  // used): the distance between everything else.
+  const SettledPairs* excluded = nullptr;
 };
 
 struct DistanceResult {

@@ -46,6 +46,12 @@ struct SettledPairs {
         if (in(groups, ga, gb) && !in(apart, ga, gb)) return true;
     return false;
   }
+  // Every pair of groups under the two nodes settled (apart ones not counted: a distance query
+  // leaves the settled out, but what is only apart at one pose may come nearer at another).
+  bool nodes_settled(int node_a, int node_b) const {
+    const TriangleGroups::NodeGroups x = a->of_node(node_a), y = b->of_node(node_b);
+    return in(groups, x.first, y.first) && in(groups, x.first, y.second) && in(groups, x.second, y.first) && in(groups, x.second, y.second);
+  }
   bool triangles_settled(int ordered_a, int ordered_b) const {
     return in(groups, a->of_ordered_triangle(ordered_a), b->of_ordered_triangle(ordered_b));
   }
