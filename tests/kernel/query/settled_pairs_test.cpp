@@ -2,7 +2,8 @@
 // caller has decided, and nothing else. Checked against brute force over every triangle pair, on
 // random soups and blobs with random groups: pairs_within lists exactly the pairs within reach
 // that are not settled, and finds a witness exactly when a settled pair is within reach; collide
-// reports exactly the crossing pairs that are not settled. The tree labels equal their subtrees'.
+// reports exactly the crossing pairs that are not settled; a distance query leaving them out finds
+// the nearest of the others. The tree labels equal their subtrees'.
 #include "kernel/bvh/triangle_groups.h"
 #include "kernel/query/mesh_collision.h"
 #include "kernel/query/mesh_distance.h"
@@ -13,6 +14,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
 #include <set>
 
 namespace gk {
@@ -101,12 +104,14 @@ TEST(SettledPairs, QueriesSkipExactlyTheSettledPairs) {
     // Brute force over every pair, in world coordinates.
     std::set<std::pair<std::uint32_t, std::uint32_t>> near_open, crossing_open;
     bool settled_near = false;
+    double nearest_open = std::numeric_limits<double>::infinity();
     for (std::uint32_t ta = 0; ta < mesh_a->triangle_count(); ++ta)
       for (std::uint32_t tb = 0; tb < mesh_b->triangle_count(); ++tb) {
         Triangle x = mesh_a->triangle(ta), y = mesh_b->triangle(tb);
         for (Vec3& p : x) p = pose_a.apply(p);
         for (Vec3& p : y) p = pose_b.apply(p);
         const double d = triangle_distance(x, y).distance;
+        if (!is_settled(ta, tb)) nearest_open = std::min(nearest_open, d);
         // Pairs within rounding of delta either way are left out of the comparison.
         if (std::abs(d - delta) < 1e-9) continue;
         if (is_settled(ta, tb)) {
@@ -130,6 +135,16 @@ TEST(SettledPairs, QueriesSkipExactlyTheSettledPairs) {
       EXPECT_LE(near.settled_witness->distance_mm, delta);
     }
     (settled_near ? witnesses : without)++;
+
+    // A distance query leaving the settled pairs out: the nearest of the others.
+    DistanceRequest excluding;
+    excluding.excluded = &settled;
+    const DistanceResult apart = distance(*tree_a, pose_a, *tree_b, pose_b, excluding).value();
+    ASSERT_EQ(apart.found, std::isfinite(nearest_open));
+    if (apart.found) {
+      EXPECT_NEAR(apart.distance_mm, nearest_open, 1e-9) << "round " << round;
+      EXPECT_FALSE(is_settled(apart.triangle_a, apart.triangle_b));
+    }
 
     CollisionRequest request;
     request.all_contacts = true;
