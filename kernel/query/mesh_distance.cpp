@@ -313,7 +313,7 @@ Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pos
   while (top > 0 && !result.truncated) {
     const auto [na, nb] = stack[--top];
     if ((result.stats.node_pairs_tested++ & kStopCheckMask) == 0 && stop.stop_requested()) return stopped("the pairs within the gap");
-    // Settled pairs need looking at only until one of them is found within reach.
+    // Settled pairs (their witness looked for above) and pairs proven apart are skipped.
     if (settled && settled->skip_nodes(na, nb, true)) continue;
     if (frame.pair_lower_bound(na, nb, std::nextafter(delta_mm, 1e300)) > delta_mm) continue;
     const bool leaf_a = frame.is_leaf_a(na), leaf_b = frame.is_leaf_b(nb);

@@ -69,8 +69,8 @@ struct ProximityResult {
 
 // Every triangle pair at distance <= delta_mm (touching and intersecting pairs included), up to
 // max_pairs of them; pairs of settled groups (optional) apart, as above. `enough` (optional) is
-// asked of each pair as it is found: true ends the search there (truncated is then set, and the
-// pair is the list's last).
+// asked of each pair as it is found: true ends the search there (truncated is then set; the
+// list, sorted, holds the pairs found so far).
 Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pose_a, const MeshBvh& b,
                                      const RigidTransform& pose_b, double delta_mm,
                                      std::size_t max_pairs = std::numeric_limits<std::size_t>::max(),
