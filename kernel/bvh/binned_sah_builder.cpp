@@ -14,7 +14,7 @@ struct Prim {
   float lo[3];
   std::uint32_t id;
   float hi[3];
-  float unused;
+  std::int32_t key;  // BuildKeys: triangles of different keys part below its node size
   float c(int a) const { return lo[a] + hi[a]; }
 };
 
@@ -42,7 +42,54 @@ struct Builder {
   std::vector<Prim>& prims;
   std::vector<BvhNode>& nodes;
   int leaf_size;
+  std::size_t key_split_at;  // 0: no keys
   int depth = 0;
+
+  // With keys, a node of at most key_split_at triangles of several keys: where its keys part,
+  // half of them from the other half in the order of their triangles' mean centroid along the
+  // axis where those means spread most (a node of many small groups stays shallow); else end.
+  std::size_t key_split(std::size_t begin, std::size_t end) {
+    if (end - begin > key_split_at) return end;
+    const std::int32_t first = prims[begin].key;
+    bool mixed = false;
+    for (std::size_t i = begin + 1; i < end && !mixed; ++i) mixed = prims[i].key != first;
+    if (!mixed) return end;
+    struct KeyMean {
+      std::int32_t key;
+      double sum[3];
+      std::size_t n;
+    };
+    std::vector<KeyMean> keys;
+    for (std::size_t i = begin; i < end; ++i) {
+      auto at = std::find_if(keys.begin(), keys.end(), [&](const KeyMean& k) { return k.key == prims[i].key; });
+      if (at == keys.end()) at = keys.insert(keys.end(), KeyMean{prims[i].key, {0.0, 0.0, 0.0}, 0});
+      for (int a = 0; a < 3; ++a) at->sum[a] += prims[i].c(a);
+      ++at->n;
+    }
+    int axis = 0;
+    double widest = -1.0;
+    for (int a = 0; a < 3; ++a) {
+      double lo = INFINITY, hi = -INFINITY;
+      for (const KeyMean& k : keys) {
+        lo = std::min(lo, k.sum[a] / static_cast<double>(k.n));
+        hi = std::max(hi, k.sum[a] / static_cast<double>(k.n));
+      }
+      if (hi - lo > widest) {
+        widest = hi - lo;
+        axis = a;
+      }
+    }
+    std::sort(keys.begin(), keys.end(), [&](const KeyMean& l, const KeyMean& r) {
+      const double ml = l.sum[axis] / static_cast<double>(l.n), mr = r.sum[axis] / static_cast<double>(r.n);
+      return ml != mr ? ml < mr : l.key < r.key;
+    });
+    keys.resize(keys.size() / 2);
+    const auto split = std::stable_partition(prims.begin() + static_cast<std::ptrdiff_t>(begin), prims.begin() + static_cast<std::ptrdiff_t>(end),
+                                             [&](const Prim& p) {
+                                               return std::any_of(keys.begin(), keys.end(), [&](const KeyMean& k) { return k.key == p.key; });
+                                             });
+    return static_cast<std::size_t>(split - prims.begin());
+  }
 
   void make_leaf(int node, std::size_t begin, std::size_t end) {
     nodes[static_cast<std::size_t>(node)].index = static_cast<std::int32_t>(begin);
@@ -58,8 +105,24 @@ struct Builder {
     std::copy(bounds.hi, bounds.hi + 3, n.hi);
     nodes.push_back(n);
     const std::size_t count = end - begin;
-    if (count <= static_cast<std::size_t>(leaf_size) || level >= kMaxBvhDepth) {
+    const std::size_t by_key = level >= kMaxBvhDepth ? end : key_split(begin, end);
+    if (by_key == end && (count <= static_cast<std::size_t>(leaf_size) || level >= kMaxBvhDepth)) {
       make_leaf(node, begin, end);
+      return node;
+    }
+    std::size_t mid;
+    Box left_bounds, left_centres, right_bounds, right_centres;
+    if (by_key != end) {
+      mid = by_key;
+      for (std::size_t i = begin; i < end; ++i) {
+        (i < mid ? left_bounds : right_bounds).grow(prims[i].lo, prims[i].hi);
+        const float pc[3] = {prims[i].c(0), prims[i].c(1), prims[i].c(2)};
+        (i < mid ? left_centres : right_centres).grow(pc, pc);
+      }
+      build(begin, mid, left_bounds, left_centres, level + 1);
+      const int right = build(mid, end, right_bounds, right_centres, level + 1);
+      nodes[static_cast<std::size_t>(node)].index = right;
+      nodes[static_cast<std::size_t>(node)].count = 0;
       return node;
     }
     int axis = 0;
@@ -69,8 +132,6 @@ struct Builder {
         extent = centres.hi[a] - centres.lo[a];
         axis = a;
       }
-    std::size_t mid;
-    Box left_bounds, left_centres, right_bounds, right_centres;
     if (!(extent > 0.0f)) {
       // Every centroid in one place: any halving is as good as another.
       mid = begin + count / 2;
@@ -155,7 +216,7 @@ void triangle_float_box(const Triangle& t, float lo[3], float hi[3]) {
   }
 }
 
-BuiltTree build_binned_sah(const TriangleMesh& mesh, int leaf_size) {
+BuiltTree build_binned_sah(const TriangleMesh& mesh, int leaf_size, const BuildKeys& keys) {
   const std::size_t n = mesh.triangle_count();
   std::vector<Prim> prims(n);
   Box bounds, centres;
@@ -163,7 +224,7 @@ BuiltTree build_binned_sah(const TriangleMesh& mesh, int leaf_size) {
     Prim& p = prims[i];
     triangle_float_box(mesh.triangle(i), p.lo, p.hi);
     p.id = static_cast<std::uint32_t>(i);
-    p.unused = 0.0f;
+    p.key = keys.of_triangle ? (*keys.of_triangle)[i] : 0;
     bounds.grow(p.lo, p.hi);
     const float pc[3] = {p.c(0), p.c(1), p.c(2)};
     centres.grow(pc, pc);
@@ -172,7 +233,7 @@ BuiltTree build_binned_sah(const TriangleMesh& mesh, int leaf_size) {
   // A binary tree of leaves holding at least one triangle has fewer than 2n nodes; with bigger
   // leaves it has far fewer, so reserve for leaves about half full and let the vector grow.
   tree.nodes.reserve(std::max<std::size_t>(1, 2 * n / static_cast<std::size_t>(std::max(1, leaf_size / 2)) + 1));
-  Builder builder{prims, tree.nodes, leaf_size};
+  Builder builder{prims, tree.nodes, leaf_size, keys.of_triangle ? keys.split_at : 0};
   if (n > 0) builder.build(0, n, bounds, centres, 0);
   tree.nodes.shrink_to_fit();
   tree.depth = builder.depth + 1;

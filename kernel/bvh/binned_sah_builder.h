@@ -19,8 +19,16 @@ struct BuiltTree {
   int depth = 0;                     // levels, the root's being 1
 };
 
+// A key per mesh triangle (its group, say): a node of at most split_at triangles of several keys
+// is split by key before space, one key's triangles from the rest, so that the nodes below hold
+// one key each (a query can then skip a group's nodes whole, kernel/query/settled_pairs.h).
+struct BuildKeys {
+  const std::vector<std::int32_t>* of_triangle = nullptr;  // none: space only
+  std::size_t split_at = 0;
+};
+
 // leaf_size: a node of at most this many triangles becomes a leaf. The mesh must have triangles.
-BuiltTree build_binned_sah(const TriangleMesh& mesh, int leaf_size);
+BuiltTree build_binned_sah(const TriangleMesh& mesh, int leaf_size, const BuildKeys& keys = {});
 
 // The box of one triangle rounded outward to float.
 void triangle_float_box(const Triangle& t, float lo[3], float hi[3]);

@@ -21,9 +21,10 @@ Result<std::shared_ptr<MeshBvh>> MeshBvh::build(std::shared_ptr<const TriangleMe
   if (mesh->triangle_count() == 0) return invalid_argument("mesh", "has no triangles");
   if (mesh->triangle_count() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max() / 2))
     return invalid_argument("mesh", "has more triangles than a tree can index");
+  if (options.keys && options.keys->size() != mesh->triangle_count()) return invalid_argument("keys", "must have one key per triangle");
   std::shared_ptr<MeshBvh> bvh(new MeshBvh());
   bvh->mesh_ = std::move(mesh);
-  BuiltTree tree = build_binned_sah(*bvh->mesh_, options.leaf_size);
+  BuiltTree tree = build_binned_sah(*bvh->mesh_, options.leaf_size, {options.keys, options.key_split_at});
   bvh->nodes_ = std::move(tree.nodes);
   bvh->ordered_to_mesh_ = std::move(tree.order);
   bvh->depth_ = tree.depth;

@@ -27,6 +27,10 @@ struct BvhBuildOptions {
   // collide 1.1-1.5x, builds twice as fast and trees take about 40 % less memory; near-contact
   // distance on the smallest pair (env/rob) about 6 % slower (docs/PERFORMANCE.md, kernel_fcl_table).
   int leaf_size = 4;
+  // One key per mesh triangle, or none: triangles of different keys part in the nodes of at most
+  // key_split_at triangles (BuildKeys), so that those nodes each hold one key.
+  const std::vector<std::int32_t>* keys = nullptr;
+  std::size_t key_split_at = 1024;
 };
 
 // A mesh ready for queries: the mesh, its tree, and its triangles in tree order.
@@ -54,6 +58,7 @@ class MeshBvh {
   void refit(std::shared_ptr<const TriangleMesh> moved_mesh);
 
   const TriangleMesh& mesh() const { return *mesh_; }
+  const std::shared_ptr<const TriangleMesh>& shared_mesh() const { return mesh_; }
   // The nodes in pre-order, the root first.
   const BvhNode* nodes() const { return nodes_.data(); }
   const BvhNode& node(int n) const { return nodes_[static_cast<std::size_t>(n)]; }

@@ -50,6 +50,14 @@ void expect_tree_bounds_triangles(const MeshBvh& bvh) {
   for (std::uint32_t t = 0; t < bvh.mesh().triangle_count(); ++t) EXPECT_EQ(seen.count(t), 1u) << "triangle " << t;
 }
 
+// How many triangles lie under node n (leaves' ranges are contiguous in pre-order).
+std::size_t subtree_triangles(const MeshBvh& tree, int n) {
+  int first = n, last = n;
+  while (!tree.node(first).is_leaf()) first = first + 1;
+  while (!tree.node(last).is_leaf()) last = tree.node(last).second_child();
+  return static_cast<std::size_t>(tree.node(last).last_triangle() - tree.node(first).first_triangle() + 1);
+}
+
 TEST(MeshBvh, EveryTriangleInExactlyOneLeafInsideItsBox) {
   Rng rng(7);
   for (int leaf_size : {1, 4}) {
@@ -59,6 +67,70 @@ TEST(MeshBvh, EveryTriangleInExactlyOneLeafInsideItsBox) {
     expect_tree_bounds_triangles(*bvh.value());
     EXPECT_LE(bvh.value()->depth(), kMaxBvhDepth + 1);
   }
+}
+
+// Built with a key per triangle (a feature's group, say): every node of at most key_split_at
+// triangles holds one key, the tree still holds every triangle once inside its boxes, many keys
+// keep it shallow, and it answers as the tree built on space alone (brute force).
+TEST(MeshBvh, KeyedTreesHoldOneKeyInEverySmallNode) {
+  Rng rng(11);
+  const auto blob = testing::share(testing::random_closed_blob(rng, 3, 10.0, 0.3, Vec3::Zero()));
+  const auto other = testing::share(testing::random_closed_blob(rng, 2, 6.0, 0.3, Vec3::Zero()));
+  for (const int key_count : {2, 5, 300}) {
+    for (const std::size_t split_at : {std::size_t{16}, std::size_t{1024}, std::size_t{1} << 40}) {
+      // Keys by place (a band of the blob) and by chance, and one key of every tenth triangle left out.
+      std::vector<std::int32_t> keys(blob->triangle_count());
+      for (std::size_t t = 0; t < keys.size(); ++t)
+        keys[t] = t % 10 == 0 ? -1 : static_cast<std::int32_t>((static_cast<std::size_t>(std::floor(blob->triangle(t)[0].x() + 20.0)) * 7 + t % 3) % key_count);
+      BvhBuildOptions options;
+      options.keys = &keys;
+      options.key_split_at = split_at;
+      auto keyed = MeshBvh::build(blob, options);
+      ASSERT_TRUE(keyed.ok());
+      const MeshBvh& tree = *keyed.value();
+      expect_tree_bounds_triangles(tree);
+      EXPECT_LE(tree.depth(), kMaxBvhDepth + 1);
+      EXPECT_LE(tree.depth(), 40) << key_count << " keys: parted half by half, not one by one";
+      // The keys under each node (pre-order: children after their parent). A node of at most
+      // split_at triangles and several keys parts them, no key on both sides, so that every node
+      // below it holds one; above split_at space decides.
+      std::vector<std::set<std::int32_t>> under(static_cast<std::size_t>(tree.node_count()));
+      for (int n = tree.node_count() - 1; n >= 0; --n) {
+        const BvhNode& node = tree.node(n);
+        std::set<std::int32_t>& mine = under[static_cast<std::size_t>(n)];
+        if (node.is_leaf()) {
+          for (int k = node.first_triangle(); k <= node.last_triangle(); ++k) mine.insert(keys[tree.mesh_triangle_index(k)]);
+          EXPECT_EQ(mine.size(), 1u) << "leaf " << n << " mixes keys";
+          continue;
+        }
+        const std::set<std::int32_t>& left = under[static_cast<std::size_t>(n + 1)];
+        const std::set<std::int32_t>& right = under[static_cast<std::size_t>(node.second_child())];
+        mine = left;
+        mine.insert(right.begin(), right.end());
+        if (mine.size() > 1 && subtree_triangles(tree, n) <= split_at) {
+          EXPECT_EQ(left.size() + right.size(), mine.size()) << "node " << n << " has a key on both sides";
+        }
+      }
+      auto plain = MeshBvh::build(other).value();
+      for (int i = 0; i < 8; ++i) {
+        const RigidTransform pose = testing::random_pose(rng, 12.0);
+        auto d = distance(tree, RigidTransform::identity(), *plain, pose);
+        ASSERT_TRUE(d.ok());
+        EXPECT_NEAR(d.value().distance_mm, testing::brute_force_distance(*blob, RigidTransform::identity(), *other, pose), 1e-9);
+        CollisionRequest all;
+        all.all_contacts = true;
+        auto c = collide(tree, RigidTransform::identity(), *plain, pose, all);
+        ASSERT_TRUE(c.ok());
+        EXPECT_EQ(c.value().contacts.size(), testing::brute_force_contacts(*blob, RigidTransform::identity(), *other, pose).size());
+      }
+    }
+  }
+  std::vector<std::int32_t> short_keys(3, 0);
+  BvhBuildOptions bad;
+  bad.keys = &short_keys;
+  auto refused = MeshBvh::build(blob, bad);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().field, "keys");
 }
 
 // Coordinates no float can hold: at 25,000 mm floats are 2 um apart, so a box rounded to nearest
