@@ -114,17 +114,32 @@ struct Builder {
     Box left_bounds, left_centres, right_bounds, right_centres;
     if (by_key != end) {
       mid = by_key;
-      for (std::size_t i = begin; i < end; ++i) {
-        (i < mid ? left_bounds : right_bounds).grow(prims[i].lo, prims[i].hi);
-        const float pc[3] = {prims[i].c(0), prims[i].c(1), prims[i].c(2)};
-        (i < mid ? left_centres : right_centres).grow(pc, pc);
-      }
-      build(begin, mid, left_bounds, left_centres, level + 1);
-      const int right = build(mid, end, right_bounds, right_centres, level + 1);
-      nodes[static_cast<std::size_t>(node)].index = right;
-      nodes[static_cast<std::size_t>(node)].count = 0;
-      return node;
+      measure_sides(begin, mid, end, left_bounds, left_centres, right_bounds, right_centres);
+    } else {
+      split_by_area(begin, end, centres, mid, left_bounds, left_centres, right_bounds, right_centres);
     }
+    build(begin, mid, left_bounds, left_centres, level + 1);
+    const int right = build(mid, end, right_bounds, right_centres, level + 1);
+    nodes[static_cast<std::size_t>(node)].index = right;
+    nodes[static_cast<std::size_t>(node)].count = 0;
+    return node;
+  }
+
+  // The boxes of [begin, mid) and [mid, end), and of their centroids.
+  void measure_sides(std::size_t begin, std::size_t mid, std::size_t end, Box& left_bounds, Box& left_centres, Box& right_bounds,
+                     Box& right_centres) const {
+    left_bounds = right_bounds = left_centres = right_centres = Box{};
+    for (std::size_t i = begin; i < end; ++i) {
+      (i < mid ? left_bounds : right_bounds).grow(prims[i].lo, prims[i].hi);
+      const float pc[3] = {prims[i].c(0), prims[i].c(1), prims[i].c(2)};
+      (i < mid ? left_centres : right_centres).grow(pc, pc);
+    }
+  }
+
+  // The binned surface-area split of [begin, end) (partitioned in place at mid).
+  void split_by_area(std::size_t begin, std::size_t end, const Box& centres, std::size_t& mid, Box& left_bounds, Box& left_centres,
+                     Box& right_bounds, Box& right_centres) {
+    const std::size_t count = end - begin;
     int axis = 0;
     float extent = centres.hi[0] - centres.lo[0];
     for (int a = 1; a < 3; ++a)
@@ -135,13 +150,7 @@ struct Builder {
     if (!(extent > 0.0f)) {
       // Every centroid in one place: any halving is as good as another.
       mid = begin + count / 2;
-      for (std::size_t i = begin; i < end; ++i) {
-        Box& b = i < mid ? left_bounds : right_bounds;
-        Box& c = i < mid ? left_centres : right_centres;
-        b.grow(prims[i].lo, prims[i].hi);
-        const float pc[3] = {prims[i].c(0), prims[i].c(1), prims[i].c(2)};
-        c.grow(pc, pc);
-      }
+      measure_sides(begin, mid, end, left_bounds, left_centres, right_bounds, right_centres);
     } else {
       const float origin = centres.lo[axis];
       // Slightly under kBins / extent, so the largest centroid still falls in the last bin.
@@ -191,19 +200,9 @@ struct Builder {
       mid = static_cast<std::size_t>(split - prims.begin());
       if (mid == begin || mid == end) {  // guards against a float surprise: halve instead
         mid = begin + count / 2;
-        left_bounds = right_bounds = left_centres = right_centres = Box{};
-        for (std::size_t i = begin; i < end; ++i) {
-          (i < mid ? left_bounds : right_bounds).grow(prims[i].lo, prims[i].hi);
-          const float pc[3] = {prims[i].c(0), prims[i].c(1), prims[i].c(2)};
-          (i < mid ? left_centres : right_centres).grow(pc, pc);
-        }
+        measure_sides(begin, mid, end, left_bounds, left_centres, right_bounds, right_centres);
       }
     }
-    build(begin, mid, left_bounds, left_centres, level + 1);
-    const int right = build(mid, end, right_bounds, right_centres, level + 1);
-    nodes[static_cast<std::size_t>(node)].index = right;
-    nodes[static_cast<std::size_t>(node)].count = 0;
-    return node;
   }
 };
 
