@@ -12,7 +12,10 @@ namespace gk::occt {
 struct MeshedShape {
   TriangleMesh mesh;
   std::vector<int> face_of_triangle;  // 1-based face index in the shape's face map (TopExp::MapShapes order)
-  double deflection_mm = 0.0;         // the linear deflection used: the mesh is within it of the surface
+  // How far the triangles may lie from the surface [mm]: the deflection asked, or the deviation
+  // measured on the tessellation (mesh_shape) when larger. OCCT does not hold the asked one on
+  // every surface (a sphere's triangles lie up to about twice it away).
+  double deflection_mm = 0.0;
 };
 
 // Meshes a copy of the shape (the input is never modified, so shapes can be shared across threads).

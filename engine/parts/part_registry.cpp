@@ -56,9 +56,10 @@ Result<TriangleMesh> PartRegistry::read_in_process(const std::string& path, cons
     const Aabb box = shape.value().bounds();
     const double diagonal = box.empty() ? 0.0 : (box.max - box.min).norm();
     const double deflection = std::max(deflection_mm, tolerances::kCadDeflectionRelative * diagonal);
-    if (used_deflection_mm) *used_deflection_mm = deflection;
     auto meshed = occt::mesh_shape(shape.value(), deflection);
     if (!meshed.ok()) return invalid_argument("data", meshed.error().to_string());
+    // What the triangles were measured to keep to (wider than asked on some surfaces).
+    if (used_deflection_mm) *used_deflection_mm = meshed.value().deflection_mm;
     if (shape_out) *shape_out = shape.value();
     if (face_of_triangle) *face_of_triangle = meshed.value().face_of_triangle;
     return std::move(meshed.value().mesh);

@@ -149,6 +149,12 @@ inline constexpr double kRetractResolutionMm = 8.0;
 // bounds; one value, so a part is tessellated and its tree built once). [mm]
 inline constexpr double kPartDeflectionMm = 0.05;
 
+// A tessellation's deviation from its surface, measured at its triangles' edge midpoints and
+// centroids (occt_adapters/shape_mesher), is widened by this before it enters the deflection
+// window: the measure is exact for a surface that is its second-order expansion over each
+// triangle, and the margin covers the higher orders on triangles small against the curvature. [1]
+inline constexpr double kTessellationDeviationMargin = 1.25;
+
 // ClearanceQuery: the pairs closer than the gap this near each other form one region, unless the
 // request says otherwise. [mm]
 inline constexpr double kRegionMergeMm = 10.0;

@@ -7,15 +7,21 @@
 #include "occt_adapters/brep_contact.h"
 #include "occt_adapters/exact_measures.h"
 #include "occt_adapters/shape_builders.h"
+#include "occt_adapters/shape_impl.h"
 #include "occt_adapters/shape_import.h"
 #include "occt_adapters/shape_mesher.h"
 #include "tests/support/random_meshes.h"
 #include "kernel/core/units.h"
 
+#include <BRepPrimAPI_MakeCylinder.hxx>
+#include <BRepPrimAPI_MakeSphere.hxx>
+#include <BRepPrimAPI_MakeTorus.hxx>
+#include <gp_Ax2.hxx>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 
 namespace gk::occt {
@@ -93,6 +99,39 @@ TEST(ShapeMesher, KeepsFaceIdsAndStaysWithinTheDeflection) {
   }
   EXPECT_FALSE(mesh_shape(shape, 0.0).ok());
   EXPECT_FALSE(mesh_shape(Shape(), 0.1).ok());
+}
+
+// The deflection a tessellation reports bounds how far its triangles lie from the surface, where
+// OCCT's own control does not hold the asked one. The oracle: each triangle's points on a grid of
+// 66 against the analytic surface (a sphere at factory coordinates, a torus, a cylinder's side).
+double farthest_from(const MeshedShape& m, const std::function<double(const Vec3&)>& from_surface) {
+  double farthest = 0.0;
+  for (std::size_t t = 0; t < m.mesh.triangle_count(); ++t) {
+    const Triangle tri = m.mesh.triangle(t);
+    for (int i = 0; i <= 10; ++i)
+      for (int j = 0; i + j <= 10; ++j) farthest = std::max(farthest, from_surface((i * tri[0] + j * tri[1] + (10 - i - j) * tri[2]) / 10.0));
+  }
+  return farthest;
+}
+
+TEST(ShapeMesher, TheReportedDeflectionBoundsTheTrianglesDistanceFromTheSurface) {
+  for (const double radius : {5.0, 50.0, 500.0}) {
+    const Vec3 centre(1e5, 0, 0);
+    const MeshedShape m = mesh_shape(wrap(BRepPrimAPI_MakeSphere(gp_Pnt(centre.x(), 0, 0), radius).Shape()), 0.05).value();
+    const double farthest = farthest_from(m, [&](const Vec3& p) { return std::abs((p - centre).norm() - radius); });
+    EXPECT_GE(m.deflection_mm, farthest) << "R " << radius;
+    EXPECT_LE(m.deflection_mm, 2.0 * std::max(0.05, farthest)) << "R " << radius << ": no wider than needed";
+    if (radius == 50.0) {
+      EXPECT_GT(farthest, 0.05) << "OCCT's own deflection on a sphere (if this fails, OCCT now holds it: the measure still bounds it)";
+    }
+  }
+  const MeshedShape torus = mesh_shape(wrap(BRepPrimAPI_MakeTorus(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 40.0, 8.0).Shape()), 0.05).value();
+  EXPECT_GE(torus.deflection_mm, farthest_from(torus, [](const Vec3& p) { return std::abs(std::hypot(std::hypot(p.x(), p.y()) - 40.0, p.z()) - 8.0); }));
+  const MeshedShape cylinder = mesh_shape(wrap(BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 30.0, 10.0).Shape()), 0.05).value();
+  // Its side only (the caps are planes, their triangles on them).
+  EXPECT_GE(cylinder.deflection_mm, farthest_from(cylinder, [](const Vec3& p) {
+    return p.z() > 1e-9 && p.z() < 10.0 - 1e-9 ? std::abs(std::hypot(p.x(), p.y()) - 30.0) : 0.0;
+  }));
 }
 
 TEST(SweptSolids, RevolvedRectangleIsAQuarterCylinder) {

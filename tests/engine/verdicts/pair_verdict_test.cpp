@@ -44,7 +44,7 @@ std::shared_ptr<PartGeometry> cad_part(const TopoDS_Shape& shape, double deflect
   part->bvh = MeshBvh::build(part->mesh).value();
   part->shape = read.value();
   part->face_of_triangle = std::move(meshed.value().face_of_triangle);
-  part->deflection_mm = part->shape.is_polyhedral() ? 0.0 : deflection_mm;
+  part->deflection_mm = part->shape.is_polyhedral() ? 0.0 : meshed.value().deflection_mm;  // as the part registry takes it
   return part;
 }
 
