@@ -65,6 +65,9 @@ struct Search {
     ++stats.triangle_pairs_tested;
     const TriangleDistance d = triangle_distance(a.ordered_triangle(ka), tb, best);
     if (!d.bounded_only && d.distance < best) {
+      if (request.excluded_pair &&
+          request.excluded_pair(a.mesh_triangle_index(ka), frame.b().mesh_triangle_index(kb), frame.to_world(d.on_p), frame.to_world(d.on_q), d.distance))
+        return;
       best = own_best = d.distance;
       best_ka = ka;
       best_kb = kb;

@@ -34,6 +34,12 @@ struct DistanceRequest {
   // Pairs of these settled groups are left out (SettledPairs::groups; its `apart` list is not
   // used): the distance between everything else.
   const SettledPairs* excluded = nullptr;
+  // And pairs the caller leaves out one by one, judged on their nearest points (mesh triangle
+  // indices, world points; the distance is the pair's): asked only of a pair that would be the
+  // nearest so far. The nodes' bounds do not know them, so a search among many such pairs costs
+  // what it costs to look at them all.
+  std::function<bool(std::uint32_t triangle_a, std::uint32_t triangle_b, const Vec3& point_a, const Vec3& point_b, double distance)>
+      excluded_pair;
 };
 
 struct DistanceResult {
