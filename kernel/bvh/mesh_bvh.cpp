@@ -28,6 +28,7 @@ Result<std::shared_ptr<MeshBvh>> MeshBvh::build(std::shared_ptr<const TriangleMe
   bvh->nodes_ = std::move(tree.nodes);
   bvh->ordered_to_mesh_ = std::move(tree.order);
   bvh->depth_ = tree.depth;
+  bvh->slabs_at_any_size_ = options.slabs_at_any_size;
   bvh->order_triangles();
   return bvh;
 }
@@ -245,7 +246,7 @@ OrientedBox MeshBvh::oriented_box() const {
 const NodeSlab* MeshBvh::node_slabs() const {
   // A small mesh's distance queries are quick without them, and its bytes per triangle are
   // already the highest (fixed costs, unshared vertices): 20 bytes a node more would pass 100.
-  if (mesh_->triangle_count() < kMinTrianglesForSlabs) return nullptr;
+  if (!slabs_at_any_size_ && mesh_->triangle_count() < kMinTrianglesForSlabs) return nullptr;
   if (!slabs_fitted_.load(std::memory_order_acquire)) {
     std::lock_guard<std::mutex> lock(slabs_mutex_);
     if (!slabs_fitted_.load(std::memory_order_relaxed)) {

@@ -31,6 +31,11 @@ struct BvhBuildOptions {
   // key_split_at triangles (BuildKeys), so that those nodes each hold one key.
   const std::vector<std::int32_t>* keys = nullptr;
   std::size_t key_split_at = 1024;
+  // Node slabs (node_slabs) for a mesh of any size, not only from kMinTrianglesForSlabs triangles:
+  // for small meshes queried at contact distances many times over (a fixture's elements, each
+  // frame), where curved surfaces a fraction of a millimetre apart (a pin in its hole) have leaf
+  // boxes that overlap all round and slabs that do not.
+  bool slabs_at_any_size = false;
 };
 
 // A mesh ready for queries: the mesh, its tree, and its triangles in tree order.
@@ -72,7 +77,8 @@ class MeshBvh {
 
   // One slab per node (kernel/bvh/node_slabs.h), fitted on first use and kept until a refit:
   // distance queries read them, collision tests do not, so a mesh only ever collided with never
-  // pays their 20 bytes a node. None (nullptr) for a mesh of fewer than kMinTrianglesForSlabs.
+  // pays their 20 bytes a node. None (nullptr) for a mesh of fewer than kMinTrianglesForSlabs
+  // unless built with BvhBuildOptions::slabs_at_any_size.
   static constexpr std::size_t kMinTrianglesForSlabs = 4096;
   const NodeSlab* node_slabs() const;
   // The most bytes the slabs of a mesh of this many triangles can take (a tree has fewer than two
@@ -106,6 +112,7 @@ class MeshBvh {
   const TriangleMesh::Face* faces_in_order_ = nullptr;
   const Vec3* vertices_in_order_ = nullptr;
   int depth_ = 0;
+  bool slabs_at_any_size_ = false;
   mutable std::mutex slabs_mutex_;
   mutable std::vector<NodeSlab> slabs_;
   mutable std::atomic<bool> slabs_fitted_{false};

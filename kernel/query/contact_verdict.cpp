@@ -164,6 +164,38 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
     out.stats = measured_first->stats;
   }
   const bool surfaces_apart = measured_first && (!measured_first->found || measured_first->distance_mm > touch_margin);
+  // A caller that wants one contact, where the measure ended on a pair that crosses: that pair is
+  // the COLLISION (one crossing decides it), without the all-contacts search.
+  if (!surfaces_apart && oriented && options.max_contacts == 1 && measured_first && measured_first->found &&
+      measured_first->distance_mm == 0.0) {
+    const std::uint32_t ta = measured_first->triangle_a, tb = measured_first->triangle_b;
+    if (!a.mesh().is_degenerate(ta) && !b.mesh().is_degenerate(tb)) {
+      const Triangle tri_a = a.mesh().triangle(ta);
+      const Triangle local_b = b.mesh().triangle(tb);
+      const Triangle tri_b = {b_in_a.apply(local_b[0]), b_in_a.apply(local_b[1]), b_in_a.apply(local_b[2])};
+      const TriangleIntersection hit = intersect_triangles(tri_a, tri_b);
+      Contact c;
+      c.triangle_a = ta;
+      c.triangle_b = tb;
+      c.segment_start = hit.segment_start;
+      c.segment_end = hit.segment_end;
+      c.coplanar = hit.coplanar;
+      if (hit.intersects && !is_outside_contact(tri_a, tri_b, c)) {
+        c.segment_start = pose_a.apply(hit.segment_start);
+        c.segment_end = pose_a.apply(hit.segment_end);
+        c.point = 0.5 * (c.segment_start + c.segment_end);
+        out.verdict = Verdict::kCollision;
+        out.distance_mm = 0.0;
+        out.point_a = out.point_b = c.point;
+        out.contacts.push_back(c);
+        out.contacts_truncated = true;
+        out.crossing_pairs = 1;
+        out.first_crossing = 0;
+        out.reason = "at least 1 triangle pairs cross";
+        return out;
+      }
+    }
+  }
   if (!surfaces_apart) {
     CollisionRequest creq;
     creq.all_contacts = true;
@@ -216,8 +248,7 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
       crossings_counted_in_full = true;
     }
     CollisionResult& col = collided.value();
-    out.stats.node_pairs_tested += col.stats.node_pairs_tested;
-    out.stats.triangle_pairs_tested += col.stats.triangle_pairs_tested;
+    out.stats += col.stats;
 
     if (col.colliding) {
       out.distance_mm = 0.0;
@@ -255,8 +286,7 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
   if (!measured_first) {
     auto m = distance(a, pose_a, b, pose_b, dreq);
     if (!m.ok()) return m.error();
-    out.stats.node_pairs_tested += m.value().stats.node_pairs_tested;
-    out.stats.triangle_pairs_tested += m.value().stats.triangle_pairs_tested;
+    out.stats += m.value().stats;
     measured_first = std::move(m).value();
   }
   DistanceResult& d = *measured_first;

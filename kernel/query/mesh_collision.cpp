@@ -30,11 +30,14 @@ bool test_leaves(const MeshPairFrame& frame, int leaf_a, int leaf_b, const Colli
   std::array<bool, kMaxLeafTrianglesBounded> a_apart{};
   const int first_a = frame.begin_a(leaf_a), count_a = frame.end_a(leaf_a) - first_a + 1;
   const bool bound_a = count_a <= kMaxLeafTrianglesBounded;
-  if (bound_a)
+  if (bound_a) {
     for (int i = 0; i < count_a; ++i)
       a_apart[static_cast<std::size_t>(i)] = frame.triangle_to_node_b_bound(frame.a_triangle_in_b(first_a + i), leaf_b, kAnyGap) > 0.0;
+    result.stats.triangle_node_tests += count_a;
+  }
   for (int kb = frame.begin_b(leaf_b); kb <= frame.end_b(leaf_b); ++kb) {
     const Triangle tb = frame.b_triangle_in_a(kb);
+    ++result.stats.triangle_node_tests;
     if (frame.triangle_to_node_a_bound(tb, leaf_a, kAnyGap) > 0.0) continue;
     for (int ka = first_a; ka <= frame.end_a(leaf_a); ++ka) {
       if (bound_a && a_apart[static_cast<std::size_t>(ka - first_a)]) continue;

@@ -32,6 +32,23 @@ constexpr std::size_t kSplitFrontier = 64;
 
 const auto farther = [](const BoundedPair& x, const BoundedPair& y) { return x.lower_bound > y.lower_bound; };
 
+// Each triangle of leaf_a bounded against leaf_b (box and slab) before its pairs, when the leaf
+// holds at most kMaxLeafTriangles; of() is 0 (no bound) for a larger leaf's.
+struct LeafABounds {
+  LeafABounds(const MeshPairFrame& frame, int leaf_a, int leaf_b, double cutoff, QueryStats& stats)
+      : first(frame.begin_a(leaf_a)), count(frame.end_a(leaf_a) - first + 1), bounded(count <= kMaxLeafTriangles) {
+    if (!bounded) return;
+    for (int i = 0; i < count; ++i)
+      bound[static_cast<std::size_t>(i)] = frame.triangle_to_node_b_bound(frame.a_triangle_in_b(first + i), leaf_b, cutoff);
+    stats.triangle_node_tests += count;
+  }
+  double of(int ordered_a) const { return bounded ? bound[static_cast<std::size_t>(ordered_a - first)] : 0.0; }
+
+  std::array<double, kMaxLeafTriangles> bound{};
+  int first, count;
+  bool bounded;
+};
+
 // The best distance of two searches sharing one: lowered by either, read by both to prune.
 void lower_shared(std::atomic<double>* shared, double value) {
   if (shared == nullptr) return;
@@ -105,17 +122,13 @@ struct Search {
         // Each triangle's bound against the other leaf first: a triangle that cannot come closer
         // than the best so far is skipped with all its pairs. (Queueing the pairs that remain by
         // their bounds measured fewer of them but cost more in the queue: 10-30 % slower.)
-        std::array<double, kMaxLeafTriangles> a_bound{};
-        const int first_a = frame.begin_a(p.a), count_a = frame.end_a(p.a) - first_a + 1;
-        const bool bound_a = count_a <= kMaxLeafTriangles;
-        if (bound_a)
-          for (int i = 0; i < count_a; ++i)
-            a_bound[static_cast<std::size_t>(i)] = frame.triangle_to_node_b_bound(frame.a_triangle_in_b(first_a + i), p.b, best);
+        const LeafABounds a_bounds(frame, p.a, p.b, best, stats);
         for (int kb = frame.begin_b(p.b); kb <= frame.end_b(p.b); ++kb) {
           const Triangle tb = frame.b_triangle_in_a(kb);
+          ++stats.triangle_node_tests;
           if (frame.triangle_to_node_a_bound(tb, p.a, best) >= best) continue;
-          for (int ka = first_a; ka <= frame.end_a(p.a); ++ka)
-            if (!bound_a || a_bound[static_cast<std::size_t>(ka - first_a)] < best) measure(ka, kb, tb);
+          for (int ka = a_bounds.first; ka <= frame.end_a(p.a); ++ka)
+            if (a_bounds.of(ka) < best) measure(ka, kb, tb);
         }
         if (best_ka >= 0 && best < request.stop_below_mm) {
           stopped_early = true;
@@ -199,15 +212,24 @@ std::optional<ProximityPair> settled_within(const MeshPairFrame& frame, const Se
     }
     const bool leaf_a = frame.is_leaf_a(q.a), leaf_b = frame.is_leaf_b(q.b);
     if (leaf_a && leaf_b) {
-      for (int ka = frame.begin_a(q.a); ka <= frame.end_a(q.a); ++ka)
-        for (int kb = frame.begin_b(q.b); kb <= frame.end_b(q.b); ++kb) {
+      // Each triangle's bound against the other leaf first, as in pairs_within below (two curved
+      // surfaces a fraction of a millimetre apart, a pin in its hole, have their leaf boxes
+      // overlapping all round).
+      const LeafABounds a_bounds(frame, q.a, q.b, cutoff, stats);
+      for (int kb = frame.begin_b(q.b); kb <= frame.end_b(q.b); ++kb) {
+        const Triangle tb = frame.b_triangle_in_a(kb);
+        ++stats.triangle_node_tests;
+        if (frame.triangle_to_node_a_bound(tb, q.a, cutoff) > delta_mm) continue;
+        for (int ka = a_bounds.first; ka <= frame.end_a(q.a); ++ka) {
+          if (a_bounds.of(ka) > delta_mm) continue;
           if (!settled.triangles_settled(ka, kb) || settled.skip_triangles(ka, kb, false)) continue;
           ++stats.triangle_pairs_tested;
-          const TriangleDistance d = triangle_distance(frame.a().ordered_triangle(ka), frame.b_triangle_in_a(kb), cutoff);
+          const TriangleDistance d = triangle_distance(frame.a().ordered_triangle(ka), tb, cutoff);
           if (!d.bounded_only && d.distance <= delta_mm)
             return ProximityPair{frame.a().mesh_triangle_index(ka), frame.b().mesh_triangle_index(kb), d.distance, frame.to_world(d.on_p),
                                  frame.to_world(d.on_q)};
         }
+      }
       continue;
     }
     if (!leaf_a && (leaf_b || frame.size_a(q.a) >= frame.size_b(q.b))) {
@@ -259,8 +281,7 @@ Result<DistanceResult> distance(const MeshBvh& a, const RigidTransform& pose_a, 
     first.run({0, 0, 0.0}, false, SIZE_MAX);
     request.spare->wait();
     if (second.stop_asked) first.stop_asked = true;
-    first.stats.node_pairs_tested += second.stats.node_pairs_tested;
-    first.stats.triangle_pairs_tested += second.stats.triangle_pairs_tested;
+    first.stats += second.stats;
     // Each search's witnesses are at its own best; the nearer (the lower ids on a tie) is the answer.
     const bool second_better = second.best_ka >= 0 &&
                                (first.best_ka < 0 || second.own_best < first.own_best ||
@@ -325,17 +346,13 @@ Result<ProximityResult> pairs_within(const MeshBvh& a, const RigidTransform& pos
       // surfaces in line contact (a pin in its hole) have most leaf pairs' boxes overlapping and
       // few of their triangles near.
       const double cutoff = std::nextafter(delta_mm, 1e300);
-      std::array<double, kMaxLeafTriangles> a_bound{};
-      const int first_a = frame.begin_a(na), count_a = frame.end_a(na) - first_a + 1;
-      const bool bound_a = count_a <= kMaxLeafTriangles;
-      if (bound_a)
-        for (int i = 0; i < count_a; ++i)
-          a_bound[static_cast<std::size_t>(i)] = frame.triangle_to_node_b_bound(frame.a_triangle_in_b(first_a + i), nb, cutoff);
+      const LeafABounds a_bounds(frame, na, nb, cutoff, result.stats);
       for (int kb = frame.begin_b(nb); kb <= frame.end_b(nb) && !result.truncated; ++kb) {
         const Triangle tb = frame.b_triangle_in_a(kb);
+        ++result.stats.triangle_node_tests;
         if (frame.triangle_to_node_a_bound(tb, na, cutoff) > delta_mm) continue;
-        for (int ka = first_a; ka <= frame.end_a(na); ++ka) {
-          if (bound_a && a_bound[static_cast<std::size_t>(ka - first_a)] > delta_mm) continue;
+        for (int ka = a_bounds.first; ka <= frame.end_a(na); ++ka) {
+          if (a_bounds.of(ka) > delta_mm) continue;
           if (settled && settled->skip_triangles(ka, kb, true)) continue;
           ++result.stats.triangle_pairs_tested;
           const TriangleDistance d = triangle_distance(a.ordered_triangle(ka), tb, std::nextafter(delta_mm, 1e300));

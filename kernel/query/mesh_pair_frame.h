@@ -20,6 +20,15 @@ namespace gk {
 struct QueryStats {
   long long node_pairs_tested = 0;
   long long triangle_pairs_tested = 0;
+  // A triangle bounded against the other side's leaf (box and slab) before its pairs are measured:
+  // bounding-volume tests too, one triangle's box at a time.
+  long long triangle_node_tests = 0;
+  QueryStats& operator+=(const QueryStats& o) {
+    node_pairs_tested += o.node_pairs_tested;
+    triangle_pairs_tested += o.triangle_pairs_tested;
+    triangle_node_tests += o.triangle_node_tests;
+    return *this;
+  }
 };
 
 class MeshPairFrame {

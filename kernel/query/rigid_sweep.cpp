@@ -97,8 +97,7 @@ Result<SweepContact> first_contact_along(const MeshBvh& moving, const RigidTrans
     request.stop = stop;
     auto d = distance(moving, pose_between(from, to, s), fixed, fixed_pose, request);
     if (!d.ok()) return d.error();
-    out.stats.node_pairs_tested += d.value().stats.node_pairs_tested;
-    out.stats.triangle_pairs_tested += d.value().stats.triangle_pairs_tested;
+    out.stats += d.value().stats;
     if (!d.value().found) return out;
     out.distance_mm = d.value().distance_mm;
     if (out.distance_mm <= contact_mm) {

@@ -13,6 +13,8 @@
 //  - every frame against brute force (all triangle pairs but those whose boxes are apart);
 //  - every motion between frames the sweep let pass, at poses 0.01 mm apart by the frame check.
 // Usage: fixture_benchmark [frames=1000]
+// NP_TOP=n (environment): lists on stderr the frames-only frames that tested at least n triangle
+// pairs, with their contacts and each element's distance below 1 mm (where the work goes).
 #include "engine/fixtures/assembly_session.h"
 #include "engine/scenes/layout_session.h"
 #include "kernel/core/tolerances.h"
@@ -310,6 +312,17 @@ void run(const Scenario& s) {
         std::exit(1);
       }
       work.add(frame.value().work);
+      if (!sweep_too && std::getenv("NP_TOP") != nullptr && frame.value().work.triangle_pairs >= static_cast<std::uint64_t>(std::atoi(std::getenv("NP_TOP")))) {
+        std::fprintf(stderr, "frame %zu: N_p %llu, N_b %llu, verdict %s:", f, static_cast<unsigned long long>(frame.value().work.triangle_pairs),
+                     static_cast<unsigned long long>(frame.value().work.bounding_volume_tests()), to_string(frame.value().verdict));
+        for (const auto& c : frame.value().contacts)
+          std::fprintf(stderr, " [%s %s%s]", c.element_id.c_str(), to_string(c.verdict), c.intended ? " intended" : "");
+        for (const Element& e : s.statics) {
+          auto d = gk::distance(*s.moving.mesh, s.path[f], *e.mesh, e.pose);
+          if (d.ok() && d.value().distance_mm < 1.0) std::fprintf(stderr, " {%s at %.3g mm}", e.id.c_str(), d.value().distance_mm);
+        }
+        std::fprintf(stderr, "\n");
+      }
       std::set<std::string> got;
       if (sweep_too) swept_verdict[f] = frame.value().verdict;
       for (const auto& c : frame.value().contacts) {
@@ -421,11 +434,12 @@ void run(const Scenario& s) {
   std::printf("between frames: %d motions with neither end COLLISION and none reported on the way, each checked at poses %.2f mm apart: "
               "%d with a COLLISION the sweep missed\n",
               motions_sampled, kBetweenSampleMm, motions_missed);
-  std::printf("assembly session: %d frames COLLISION, %d with an intended contact (%zu mates); broad phase box tests %llu, tree node "
-              "tests %llu, exact checks %llu, sweep steps %llu\n",
-              lpm_colliding, intended_frames, s.mates.size(), static_cast<unsigned long long>(lpm_work.box_tests),
-              static_cast<unsigned long long>(lpm_work.node_tests), static_cast<unsigned long long>(lpm_work.exact_checks),
-              static_cast<unsigned long long>(lpm_work.sweep_steps));
+  const auto u = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
+  std::printf("assembly session: %d frames COLLISION, %d with an intended contact (%zu mates); N_b = broad phase box tests %llu + tree "
+              "node pairs %llu + triangle-to-leaf bounds %llu (frames only: %llu + %llu + %llu), exact checks %llu, sweep steps %llu\n",
+              lpm_colliding, intended_frames, s.mates.size(), u(lpm_work.box_tests), u(lpm_work.node_tests), u(lpm_work.triangle_node_tests),
+              u(frames_only_work.box_tests), u(frames_only_work.node_tests), u(frames_only_work.triangle_node_tests), u(lpm_work.exact_checks),
+              u(lpm_work.sweep_steps));
 }
 
 }  // namespace

@@ -2,7 +2,9 @@
 // and 4): a mesh of two bodies whose second lies inside a closed solid, an open mesh inside a
 // closed crate, the containment reported where it is; a finely meshed box resting on a plate
 // (thousands of coplanar contact pairs) is TOUCHING, and one crossing pair among them a COLLISION.
+#include "kernel/core/tolerances.h"
 #include "kernel/query/contact_verdict.h"
+#include "tests/support/near_contact_poses.h"
 #include "tests/support/random_meshes.h"
 
 #include <gtest/gtest.h>
@@ -10,6 +12,8 @@
 #include <array>
 #include <limits>
 #include <map>
+#include <tuple>
+#include <vector>
 
 namespace gk {
 namespace {
@@ -143,6 +147,48 @@ TEST(Contacts, TheVerdictIsTheSameWhateverTheContactCap) {
     ASSERT_GE(sunk.first_crossing, 0) << "cap " << cap;
     EXPECT_LE(sunk.contacts.size(), cap);
   }
+}
+
+// A caller that wants one contact and bounds the distance at the contact tolerance (a fixture
+// frame) gets COLLISION from the pair the distance measure ended on when that pair crosses, without
+// the all-contacts search. The verdict must be the one every pair gives, and the pair reported must
+// cross: blobs near contact (gaps -1...3 mm, crossing and apart), at the origin and 1e6 mm out, and
+// the box resting on the plate (thousands of touching pairs, none crossing) and sunk at one corner.
+TEST(Contacts, OneContactUnderADistanceBoundIsTheVerdictOfEveryPair) {
+  testing::Rng rng(5);
+  const auto a = bvh(testing::random_closed_blob(rng, 4, 40.0, 0.5, Vec3::Zero()));
+  const auto b = bvh(testing::random_closed_blob(rng, 3, 25.0, 0.5, Vec3::Zero()));
+  std::vector<std::tuple<const MeshBvh*, RigidTransform, const MeshBvh*, RigidTransform>> cases;
+  for (const RigidTransform& relative : testing::near_contact_poses(*a, *b, 17u, 40))
+    for (const Vec3& offset : {Vec3::Zero().eval(), Vec3(1.0e6, -4.0e5, 2.0e5)}) {
+      const RigidTransform pose_a = RigidTransform::from_translation(offset);
+      cases.emplace_back(a.get(), pose_a, b.get(), pose_a * relative);
+    }
+  const auto plate = bvh(fine_box(Vec3(-100, -100, -10), Vec3(100, 100, 0), 40));
+  const auto box = bvh(fine_box(Vec3(-50, -50, 0), Vec3(50, 50, 60), 40));
+  const RigidTransform tilted = RigidTransform::from_translation(Vec3(0, -50, -1e-3)) *
+                                RigidTransform::from_axis_angle(Vec3::UnitX(), 2e-5) *
+                                RigidTransform::from_translation(Vec3(0, 50, 0));
+  cases.emplace_back(plate.get(), RigidTransform{}, box.get(), RigidTransform{});
+  cases.emplace_back(plate.get(), RigidTransform{}, box.get(), tilted);
+  std::map<Verdict, int> seen;
+  for (std::size_t k = 0; k < cases.size(); ++k) {
+    const auto& [ma, pa, mb, pb] = cases[k];
+    const VerdictResult every = assess(*ma, pa, *mb, pb).value();
+    VerdictOptions one;
+    one.max_contacts = 1;
+    one.distance_upper_bound_mm = tolerances::kContactMm;
+    const VerdictResult got = assess(*ma, pa, *mb, pb, one).value();
+    EXPECT_EQ(got.verdict, every.verdict) << "case " << k << ": " << got.reason << " / " << every.reason;
+    ++seen[every.verdict];
+    if (got.verdict != Verdict::kCollision || got.contained) continue;
+    ASSERT_EQ(got.contacts.size(), 1u) << "case " << k;
+    ASSERT_EQ(got.first_crossing, 0) << "case " << k;
+    EXPECT_TRUE(triangle_pair_crosses(*ma, pa, got.contacts[0].triangle_a, *mb, pb, got.contacts[0].triangle_b)) << "case " << k;
+  }
+  EXPECT_GE(seen[Verdict::kCollision], 10);
+  EXPECT_GE(seen[Verdict::kClear], 10);
+  EXPECT_GE(seen[Verdict::kTouching], 1);
 }
 
 // Open meshes: any contact on proper triangles is a collision. When the first contacts listed

@@ -254,6 +254,18 @@ TEST(MeshQueriesBruteForce, ContactsDistanceAndPairsWithinPrunedBySlabsEqualTheA
   EXPECT_GE(touching, 2);
 }
 
+// A pin `off` mm off its hole's axis towards a random turn, tilted up to 0.01 rad, 10 mm in, the
+// hole turned and, every other round, 1e7 mm out: (pin's pose, hole's pose).
+std::pair<RigidTransform, RigidTransform> pin_and_hole_poses(Rng& rng, int round, double off) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double tilt = 0.01 * (2.0 * unit(rng) - 1.0), turn = 6.3 * unit(rng);
+  RigidTransform pose_hole = RigidTransform::from_axis_angle(Vec3::UnitZ(), turn);
+  if (round % 2 == 1) pose_hole.translation = Vec3(9.9e6, -2.5e6, 3.0e5);
+  const RigidTransform pin_in_hole =
+      RigidTransform::from_axis_angle(Vec3(1, 0, 0), tilt, Vec3(off * std::cos(turn), off * std::sin(turn), -10.0));
+  return {pose_hole * pin_in_hole, pose_hole};
+}
+
 // A pin in a hole, line to line on one side: two curved surfaces whose leaf boxes overlap all
 // round while few triangle pairs are near (small meshes: no slabs, boxes only). The pairs within
 // the contact distance, with each leaf pair's triangles bounded one by one, must be the
@@ -268,12 +280,7 @@ TEST(MeshQueriesBruteForce, APinInItsHoleLineToLineKeepsEveryPairWithinTheContac
     // The hole's polygon has its inradius 6.3 cos(7.5 deg) = 6.246: a pin 0.25-0.3 mm off its
     // axis reaches its facets on one side.
     const double off = 0.25 + 0.05 * unit(rng);
-    const double tilt = 0.01 * (2.0 * unit(rng) - 1.0), turn = 6.3 * unit(rng);
-    RigidTransform pose_hole = RigidTransform::from_axis_angle(Vec3::UnitZ(), turn);
-    if (round % 2 == 1) pose_hole.translation = Vec3(9.9e6, -2.5e6, 3.0e5);
-    const RigidTransform pin_in_hole =
-        RigidTransform::from_axis_angle(Vec3(1, 0, 0), tilt, Vec3(off * std::cos(turn), off * std::sin(turn), -10.0));
-    const RigidTransform pose_pin = pose_hole * pin_in_hole;
+    const auto [pose_pin, pose_hole] = pin_and_hole_poses(rng, round, off);
     const double delta = tolerances::kContactMm;
     const PairSet within = testing::brute_force_pairs_within(pin->mesh(), pose_pin, hole->mesh(), pose_hole, delta);
     const ProximityResult got = pairs_within(*pin, pose_pin, *hole, pose_hole, delta).value();
@@ -283,6 +290,46 @@ TEST(MeshQueriesBruteForce, APinInItsHoleLineToLineKeepsEveryPairWithinTheContac
     found += static_cast<int>(within.size());
   }
   EXPECT_GT(found, 50);  // the pin does reach the hole's facets
+}
+
+// The same pin and hole built with slabs although they are small (BvhBuildOptions::
+// slabs_at_any_size, what a fixture's elements get): the slabs of two coaxial curved surfaces a
+// fraction of a millimetre apart prune what their boxes cannot, and must never prune a pair that
+// is near. Pairs within the contact distance and within 0.2 mm, the minimum distance and every
+// contact (the pin passes through the closed hole's end caps), against all pairs: the pin's side
+// from line to line with the hole's facets (crossing by their sag) to 0.3 mm from them.
+TEST(MeshQueriesBruteForce, SmallMeshesWithSlabsKeepEveryNearPairOfAPinInItsHole) {
+  Rng rng(32);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  BvhBuildOptions with_slabs;
+  with_slabs.slabs_at_any_size = true;
+  const auto pin = MeshBvh::build(testing::share(testing::cylinder_mesh(6.0, 30.0, 96)), with_slabs).value();
+  const auto hole = MeshBvh::build(testing::share(testing::cylinder_mesh(6.3, 12.0, 24)), with_slabs).value();
+  ASSERT_NE(pin->node_slabs(), nullptr);
+  ASSERT_NE(hole->node_slabs(), nullptr);
+  int at_contact = 0, within_02 = 0;
+  for (int round = 0; round < 32; ++round) {
+    const double off = 0.3 * unit(rng);  // line to line at about 0.25
+    const auto [pose_pin, pose_hole] = pin_and_hole_poses(rng, round, off);
+    for (const double delta : {tolerances::kContactMm, 0.2}) {
+      const PairSet within = testing::brute_force_pairs_within(pin->mesh(), pose_pin, hole->mesh(), pose_hole, delta);
+      const ProximityResult got = pairs_within(*pin, pose_pin, *hole, pose_hole, delta).value();
+      PairSet got_set;
+      for (const ProximityPair& p : got.pairs) got_set.insert({p.triangle_a, p.triangle_b});
+      EXPECT_EQ(got_set, within) << "round " << round << ", within " << delta;
+      (delta < 0.1 ? at_contact : within_02) += static_cast<int>(within.size());
+    }
+    const double truth = testing::brute_force_distance_pruned(pin->mesh(), pose_pin, hole->mesh(), pose_hole);
+    const DistanceResult d = distance(*pin, pose_pin, *hole, pose_hole).value();
+    EXPECT_NEAR(d.distance_mm, truth, 1e-12 * std::max(1.0, truth) + 1e-12 * pose_hole.translation.norm()) << "round " << round;
+    CollisionRequest all;
+    all.all_contacts = true;
+    const CollisionResult contacts = collide(*pin, pose_pin, *hole, pose_hole, all).value();
+    EXPECT_EQ(as_set(contacts), testing::brute_force_contacts_pruned(pin->mesh(), pose_pin, hole->mesh(), pose_hole)) << "round " << round;
+  }
+  // Near pairs at both distances, or the test proves little.
+  EXPECT_GT(at_contact, 50);
+  EXPECT_GT(within_02, at_contact);
 }
 
 // A spare thread for the test: each start runs its job on a new std::thread.
