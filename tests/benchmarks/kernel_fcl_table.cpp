@@ -91,7 +91,7 @@ Subject load(const std::string& relative, double diagonal_mm, int leaf_size) {
 struct Answer {
   double value = 0.0;  // contacts, or distance
   bool collides = false;
-  long long node_pairs = 0, triangle_pairs = 0;  // our work (not counted for FCL)
+  long long node_pairs = 0, triangle_pairs = 0, triangle_node_tests = 0;  // our work (not counted for FCL)
 };
 
 Answer collide_ours(const Subject& a, const Subject& b, const RigidTransform& pb) {
@@ -108,7 +108,7 @@ Answer collide_fcl(const Subject& a, const Subject& b, const RigidTransform& pb)
 }
 Answer distance_ours(const Subject& a, const Subject& b, const RigidTransform& pb) {
   const auto r = gk::distance(*a.ours, RigidTransform{}, *b.ours, pb).value();
-  return {r.distance_mm, r.distance_mm <= 0.0, r.stats.node_pairs_tested, r.stats.triangle_pairs_tested};
+  return {r.distance_mm, r.distance_mm <= 0.0, r.stats.node_pairs_tested, r.stats.triangle_pairs_tested, r.stats.triangle_node_tests};
 }
 Answer distance_fcl(const Subject& a, const Subject& b, const RigidTransform& pb) {
   const fcl::DistanceRequestd req(true);
@@ -219,7 +219,7 @@ int main(int argc, char** argv) {
                                           {"near", &near}}) {
       std::vector<double> c_ours, c_fcl, d_ours, d_fcl, dfree_ours, dfree_fcl;
       int agree_c = 0, agree_d = 0;
-      double d_node_pairs = 0.0, d_triangle_pairs = 0.0, fcl_bv_pairs = 0.0, fcl_triangle_pairs = 0.0;
+      double d_node_pairs = 0.0, d_triangle_pairs = 0.0, d_triangle_nodes = 0.0, fcl_bv_pairs = 0.0, fcl_triangle_pairs = 0.0;
       for (const RigidTransform& pose : *poses) {
         Answer co, cf, dq, df;
         c_ours.push_back(timed_us([&] { co = collide_ours(a, b, pose); }));
@@ -228,6 +228,7 @@ int main(int argc, char** argv) {
         d_ours.push_back(du);
         d_node_pairs += static_cast<double>(dq.node_pairs);
         d_triangle_pairs += static_cast<double>(dq.triangle_pairs);
+        d_triangle_nodes += static_cast<double>(dq.triangle_node_tests);
         const double dfu = timed_us([&] { df = distance_fcl(a, b, pose); });
         d_fcl.push_back(dfu);
         const auto [bv_pairs, leaf_pairs] = distance_fcl_work(a, b, pose);
@@ -263,8 +264,10 @@ int main(int argc, char** argv) {
       line("distance", d_ours, d_fcl, agree_d, poses->size());
       line("dist_free", dfree_ours, dfree_fcl, static_cast<int>(dfree_ours.size()), dfree_ours.size());
       const double n = static_cast<double>(poses->size());
-      std::printf("%-44s %-8s %-10s node pairs %.0f, triangle pairs %.0f per distance query (ours); FCL %.0f and %.0f\n",
-                  label.c_str(), pose_kind, "work", d_node_pairs / n, d_triangle_pairs / n, fcl_bv_pairs / n, fcl_triangle_pairs / n);
+      std::printf("%-44s %-8s %-10s node pairs %.0f, triangle pairs %.0f (triangle-to-leaf bounds %.0f) per distance query (ours); FCL %.0f "
+                  "and %.0f\n",
+                  label.c_str(), pose_kind, "work", d_node_pairs / n, d_triangle_pairs / n, d_triangle_nodes / n, fcl_bv_pairs / n,
+                  fcl_triangle_pairs / n);
     }
   }
   // Slabs are fitted on a mesh's first distance query (not by collision tests): their time and
