@@ -112,6 +112,14 @@ inline constexpr double kMaxFeatureDeviationRelative = 0.05;
 // the facets' sag between corners, not for a size the mesh does not have (a bore meshed at r 9.6
 // declared r 10 let a pin 0.35 mm into its wall count as the fit's). [relative]
 inline constexpr double kMaxFeatureCornerOffRelative = 1.0e-3;
+// A fixture mate's fit lets the pin be pressed into its hole's or slot's wall by half its tolerance
+// less its clearance (an interference, or sizes that may fall short of the clearance): at most this
+// fraction of the pin's diameter. Real fits are far tighter (ISO 286 interference fits and IT12
+// size tolerances stay within about 3 % of small diameters, well below 1 % of large ones); a
+// mate beyond it is refused, not trusted - a review's mate with a 50 mm interference or a 1e300
+// tolerance made a pin 9 mm into a block's wall "intended". The mate's tolerance and clearance
+// are each at most the pin's diameter. [relative]
+inline constexpr double kMaxFitPressOfDiameter = 0.05;
 // A pose computed between two frames (kernel/query/rigid_sweep: pose_between) places points to
 // within this fraction of their coordinates' magnitude (64 rounding units of a double): a crossing
 // found there that a shift this large frees is the interpolation's own rounding (a part tipped
