@@ -40,7 +40,7 @@ bool coplanar_interiors_overlap(const Triangle& ta, const Triangle& tb) {
 }
 
 // Is the intersecting pair (ta, tb), both in A's frame and wound outward, a contact from outside?
-bool is_outside_contact(const Triangle& ta, const Triangle& tb, const Contact& c) {
+bool is_outside_contact(const Triangle& ta, const Triangle& tb) {
   int a_below_b = 0, b_below_a = 0, a_on_b = 0;
   for (const Vec3& v : ta) {
     const int s = exact::orient3d(tb[0], tb[1], tb[2], v);
@@ -58,7 +58,13 @@ bool is_outside_contact(const Triangle& ta, const Triangle& tb, const Contact& c
     return !coplanar_interiors_overlap(ta, tb);
   }
   if (a_below_b == 0 || b_below_a == 0) return true;
-  return (c.segment_end - c.segment_start).norm() <= tolerances::kPointContactMm;
+  // Each straddles the other's plane: a crossing unless they meet in a point. The segment is
+  // measured on these triangles, in A's frame, never on a contact's world segment: 1e7 mm out, a
+  // round trip through world coordinates rounds it by more than kPointContactMm (a review: a
+  // corner 1e-9 mm into a face was COLLISION or TOUCHING by where the pair stood). Triangles that
+  // do not meet here at all (the search met them in its own frame, a rounding away) do not cross.
+  const TriangleIntersection hit = intersect_triangles(ta, tb);
+  return !hit.intersects || (hit.segment_end - hit.segment_start).norm() <= tolerances::kPointContactMm;
 }
 
 }  // namespace
@@ -83,11 +89,8 @@ bool triangle_pair_crosses(const MeshBvh& a, const RigidTransform& pose_a, std::
   const Triangle tri_b = {b_in_a.apply(local_b[0]), b_in_a.apply(local_b[1]), b_in_a.apply(local_b[2])};
   const TriangleIntersection hit = intersect_triangles(tri_a, tri_b);
   if (!hit.intersects) return false;
-  Contact c;
-  c.segment_start = hit.segment_start;
-  c.segment_end = hit.segment_end;
   const bool oriented = a.mesh().is_closed_oriented() && b.mesh().is_closed_oriented();
-  if (oriented && is_outside_contact(tri_a, tri_b, c)) return false;
+  if (oriented && is_outside_contact(tri_a, tri_b)) return false;
   if (point) *point = pose_a.apply(0.5 * (hit.segment_start + hit.segment_end));
   return true;
 }
@@ -174,13 +177,11 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
       const Triangle local_b = b.mesh().triangle(tb);
       const Triangle tri_b = {b_in_a.apply(local_b[0]), b_in_a.apply(local_b[1]), b_in_a.apply(local_b[2])};
       const TriangleIntersection hit = intersect_triangles(tri_a, tri_b);
-      Contact c;
-      c.triangle_a = ta;
-      c.triangle_b = tb;
-      c.segment_start = hit.segment_start;
-      c.segment_end = hit.segment_end;
-      c.coplanar = hit.coplanar;
-      if (hit.intersects && !is_outside_contact(tri_a, tri_b, c)) {
+      if (hit.intersects && !is_outside_contact(tri_a, tri_b)) {
+        Contact c;
+        c.triangle_a = ta;
+        c.triangle_b = tb;
+        c.coplanar = hit.coplanar;
         c.segment_start = pose_a.apply(hit.segment_start);
         c.segment_end = pose_a.apply(hit.segment_end);
         c.point = 0.5 * (c.segment_start + c.segment_end);
@@ -207,7 +208,6 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
     // Which listed contacts cross (closed meshes: not a touch from outside), and how many were
     // decided on zero-area triangles.
     std::size_t decided_on_degenerate = 0;
-    const RigidTransform world_to_a = pose_a.inverse();
     const auto classify = [&](const CollisionResult& col) {
       out.first_crossing = -1;
       out.crossing_pairs = 0;
@@ -225,10 +225,7 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
         const Triangle ta = a.mesh().triangle(c.triangle_a);
         const Triangle tb_local = b.mesh().triangle(c.triangle_b);
         const Triangle tb = {b_in_a.apply(tb_local[0]), b_in_a.apply(tb_local[1]), b_in_a.apply(tb_local[2])};
-        Contact local = c;
-        local.segment_start = world_to_a.apply(c.segment_start);
-        local.segment_end = world_to_a.apply(c.segment_end);
-        if (!is_outside_contact(ta, tb, local)) {
+        if (!is_outside_contact(ta, tb)) {
           if (out.first_crossing < 0) out.first_crossing = static_cast<int>(&c - col.contacts.data());
           ++out.crossing_pairs;
         }

@@ -4,14 +4,19 @@
 // (thousands of coplanar contact pairs) is TOUCHING, and one crossing pair among them a COLLISION.
 #include "kernel/core/tolerances.h"
 #include "kernel/query/contact_verdict.h"
+#include "kernel/query/triangle_intersection.h"
+#include "kernel/predicates/exact_predicates.h"
 #include "tests/support/near_contact_poses.h"
 #include "tests/support/random_meshes.h"
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 #include <array>
 #include <limits>
 #include <map>
+#include <random>
 #include <tuple>
 #include <vector>
 
@@ -189,6 +194,61 @@ TEST(Contacts, OneContactUnderADistanceBoundIsTheVerdictOfEveryPair) {
   EXPECT_GE(seen[Verdict::kCollision], 10);
   EXPECT_GE(seen[Verdict::kClear], 10);
   EXPECT_GE(seen[Verdict::kTouching], 1);
+}
+
+// Found by a review: far from the origin the verdict on a corner pushed 1e-9 mm into a face (at
+// the point-contact threshold) depended on where the pair stood. The contacts' segments came back
+// in world coordinates and were taken back into A's frame, which 1e7 mm out rounds them by about
+// 2e-9 mm, more than kPointContactMm: 211 of 3,000 such placements were COLLISION where the rule
+// of contact_verdict.h, applied in A's frame, says TOUCHING, and 4 the other way. The oracle here
+// is that rule, on every pair, in A's frame: the verdict must not depend on the offset.
+TEST(Contacts, APointContactFarFromTheOriginIsJudgedInThePartsOwnFrame) {
+  testing::Rng rng(23);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const auto a = bvh(box_mesh(Vec3(-10, -10, -10), Vec3(10, 10, 10)));
+  const auto b = bvh(box_mesh(Vec3(-3, -3, -3), Vec3(3, 3, 3)));
+  const Vec3 corner(-3, -3, -3);
+  std::map<Verdict, int> seen;
+  for (int k = 0; k < 600; ++k) {
+    const double offset = k % 2 == 0 ? 9.7e6 : 0.0;
+    RigidTransform pose_a;
+    pose_a.rotation = Eigen::Quaterniond(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5).normalized().toRotationMatrix();
+    pose_a.translation = Vec3(offset, -0.7 * offset, 0.3 * offset) + Vec3(unit(rng), unit(rng), unit(rng));
+    // B's corner lowest, 0 to 4e-9 mm into A's top face z = 10.
+    const Mat3 turn = Eigen::AngleAxisd(6.28 * unit(rng), Vec3::UnitZ()).toRotationMatrix() *
+                      Eigen::Quaterniond::FromTwoVectors(corner.normalized(), Vec3(0, 0, -1)).toRotationMatrix();
+    double low = 1e300;
+    for (const Vec3& v : b->mesh().vertices()) low = std::min(low, (turn * v).z());
+    RigidTransform relative;
+    relative.rotation = turn;
+    relative.translation = Vec3(10 * unit(rng) - 5, 10 * unit(rng) - 5, 10 - low - 4e-9 * unit(rng));
+    const RigidTransform pose_b = pose_a * relative;
+    // The rule, every pair, in A's frame (B placed there as the verdict places it).
+    const RigidTransform b_in_a = relative_transform(pose_a, pose_b);
+    bool crossing = false;
+    for (std::uint32_t i = 0; i < a->mesh().triangle_count(); ++i)
+      for (std::uint32_t j = 0; j < b->mesh().triangle_count(); ++j) {
+        const Triangle ta = a->mesh().triangle(i), lb = b->mesh().triangle(j);
+        const Triangle tb = {b_in_a.apply(lb[0]), b_in_a.apply(lb[1]), b_in_a.apply(lb[2])};
+        const TriangleIntersection hit = intersect_triangles(ta, tb);
+        if (!hit.intersects) continue;
+        int a_below = 0, b_below = 0;
+        for (const Vec3& v : ta) a_below += exact::orient3d(tb[0], tb[1], tb[2], v) < 0;
+        for (const Vec3& v : tb) b_below += exact::orient3d(ta[0], ta[1], ta[2], v) < 0;
+        if (a_below > 0 && b_below > 0 && (hit.segment_end - hit.segment_start).norm() > tolerances::kPointContactMm) crossing = true;
+      }
+    // (Not crossing, the corner is within the contact tolerance of the face whether it meets it or not.)
+    const Verdict want = crossing ? Verdict::kCollision : Verdict::kTouching;
+    const VerdictResult every = assess(*a, pose_a, *b, pose_b).value();
+    EXPECT_EQ(every.verdict, want) << "placement " << k << ", offset " << offset;
+    VerdictOptions one;
+    one.max_contacts = 1;
+    one.distance_upper_bound_mm = 1.0;
+    EXPECT_EQ(assess(*a, pose_a, *b, pose_b, one).value().verdict, want) << "placement " << k << ", offset " << offset;
+    ++seen[want];
+  }
+  EXPECT_GE(seen[Verdict::kCollision], 50);
+  EXPECT_GE(seen[Verdict::kTouching], 50);
 }
 
 // Open meshes: any contact on proper triangles is a collision. When the first contacts listed
