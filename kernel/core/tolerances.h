@@ -114,8 +114,8 @@ inline constexpr double kMaxFeatureDeviationRelative = 0.05;
 inline constexpr double kMaxFeatureCornerOffRelative = 1.0e-3;
 // A fixture mate's fit lets the pin be pressed into its hole's or slot's wall by half its tolerance
 // less its clearance (an interference, or sizes that may fall short of the clearance): at most this
-// fraction of the pin's diameter. Real fits are far tighter (ISO 286 interference fits and IT12
-// size tolerances stay within about 3 % of small diameters, well below 1 % of large ones); a
+// fraction of the pin's diameter. A bound against absurd numbers, not a fit standard (the
+// benchmark's loosest mate, a bolt leaning in a T-slot, allows 4.2 %); a
 // mate beyond it is refused, not trusted - a review's mate with a 50 mm interference or a 1e300
 // tolerance made a pin 9 mm into a block's wall "intended". The mate's tolerance and clearance
 // are each at most the pin's diameter. [relative]

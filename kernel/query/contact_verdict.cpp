@@ -40,7 +40,8 @@ bool coplanar_interiors_overlap(const Triangle& ta, const Triangle& tb) {
 }
 
 // Is the intersecting pair (ta, tb), both in A's frame and wound outward, a contact from outside?
-bool is_outside_contact(const Triangle& ta, const Triangle& tb) {
+// hit: their intersection in that frame when the caller has it (computed here when needed).
+bool is_outside_contact(const Triangle& ta, const Triangle& tb, const TriangleIntersection* hit = nullptr) {
   int a_below_b = 0, b_below_a = 0, a_on_b = 0;
   for (const Vec3& v : ta) {
     const int s = exact::orient3d(tb[0], tb[1], tb[2], v);
@@ -63,8 +64,25 @@ bool is_outside_contact(const Triangle& ta, const Triangle& tb) {
   // round trip through world coordinates rounds it by more than kPointContactMm (a review: a
   // corner 1e-9 mm into a face was COLLISION or TOUCHING by where the pair stood). Triangles that
   // do not meet here at all (the search met them in its own frame, a rounding away) do not cross.
-  const TriangleIntersection hit = intersect_triangles(ta, tb);
-  return !hit.intersects || (hit.segment_end - hit.segment_start).norm() <= tolerances::kPointContactMm;
+  const TriangleIntersection here = hit ? *hit : intersect_triangles(ta, tb);
+  return !here.intersects || (here.segment_end - here.segment_start).norm() <= tolerances::kPointContactMm;
+}
+
+// Triangle tb of B (mesh index) in A's frame.
+Triangle b_triangle_in_a(const MeshBvh& b, const RigidTransform& b_in_a, std::uint32_t tb) {
+  const Triangle t = b.mesh().triangle(tb);
+  return {b_in_a.apply(t[0]), b_in_a.apply(t[1]), b_in_a.apply(t[2])};
+}
+
+// Where triangle ta of A and tb of B (mesh indices, neither zero-area) cross, in A's frame: their
+// intersection when they meet and (oriented meshes) not as a contact from outside.
+std::optional<TriangleIntersection> crossing_in_a(const MeshBvh& a, std::uint32_t ta, const MeshBvh& b, std::uint32_t tb,
+                                                  const RigidTransform& b_in_a, bool oriented) {
+  const Triangle tri_a = a.mesh().triangle(ta);
+  const Triangle tri_b = b_triangle_in_a(b, b_in_a, tb);
+  const TriangleIntersection hit = intersect_triangles(tri_a, tri_b);
+  if (!hit.intersects || (oriented && is_outside_contact(tri_a, tri_b, &hit))) return std::nullopt;
+  return hit;
 }
 
 }  // namespace
@@ -83,15 +101,10 @@ bool triangle_pair_crosses(const MeshBvh& a, const RigidTransform& pose_a, std::
                            const RigidTransform& pose_b, std::uint32_t tb, Vec3* point) {
   if (ta >= a.mesh().triangle_count() || tb >= b.mesh().triangle_count()) return false;
   if (a.mesh().is_degenerate(ta) || b.mesh().is_degenerate(tb)) return false;
-  const RigidTransform b_in_a = relative_transform(pose_a, pose_b);
-  const Triangle tri_a = a.mesh().triangle(ta);
-  const Triangle local_b = b.mesh().triangle(tb);
-  const Triangle tri_b = {b_in_a.apply(local_b[0]), b_in_a.apply(local_b[1]), b_in_a.apply(local_b[2])};
-  const TriangleIntersection hit = intersect_triangles(tri_a, tri_b);
-  if (!hit.intersects) return false;
   const bool oriented = a.mesh().is_closed_oriented() && b.mesh().is_closed_oriented();
-  if (oriented && is_outside_contact(tri_a, tri_b)) return false;
-  if (point) *point = pose_a.apply(0.5 * (hit.segment_start + hit.segment_end));
+  const auto hit = crossing_in_a(a, ta, b, tb, relative_transform(pose_a, pose_b), oriented);
+  if (!hit) return false;
+  if (point) *point = pose_a.apply(0.5 * (hit->segment_start + hit->segment_end));
   return true;
 }
 
@@ -173,17 +186,13 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
       measured_first->distance_mm == 0.0) {
     const std::uint32_t ta = measured_first->triangle_a, tb = measured_first->triangle_b;
     if (!a.mesh().is_degenerate(ta) && !b.mesh().is_degenerate(tb)) {
-      const Triangle tri_a = a.mesh().triangle(ta);
-      const Triangle local_b = b.mesh().triangle(tb);
-      const Triangle tri_b = {b_in_a.apply(local_b[0]), b_in_a.apply(local_b[1]), b_in_a.apply(local_b[2])};
-      const TriangleIntersection hit = intersect_triangles(tri_a, tri_b);
-      if (hit.intersects && !is_outside_contact(tri_a, tri_b)) {
+      if (const auto hit = crossing_in_a(a, ta, b, tb, b_in_a, true)) {
         Contact c;
         c.triangle_a = ta;
         c.triangle_b = tb;
-        c.coplanar = hit.coplanar;
-        c.segment_start = pose_a.apply(hit.segment_start);
-        c.segment_end = pose_a.apply(hit.segment_end);
+        c.coplanar = hit->coplanar;
+        c.segment_start = pose_a.apply(hit->segment_start);
+        c.segment_end = pose_a.apply(hit->segment_end);
         c.point = 0.5 * (c.segment_start + c.segment_end);
         out.verdict = Verdict::kCollision;
         out.distance_mm = 0.0;
@@ -223,9 +232,7 @@ Result<VerdictResult> assess(const MeshBvh& a, const RigidTransform& pose_a, con
           continue;
         }
         const Triangle ta = a.mesh().triangle(c.triangle_a);
-        const Triangle tb_local = b.mesh().triangle(c.triangle_b);
-        const Triangle tb = {b_in_a.apply(tb_local[0]), b_in_a.apply(tb_local[1]), b_in_a.apply(tb_local[2])};
-        if (!is_outside_contact(ta, tb)) {
+        if (!is_outside_contact(ta, b_triangle_in_a(b, b_in_a, c.triangle_b))) {
           if (out.first_crossing < 0) out.first_crossing = static_cast<int>(&c - col.contacts.data());
           ++out.crossing_pairs;
         }
